@@ -1,0 +1,141 @@
+"""The chapter's one configuration object, shared by the CLI, the notebooks and the tests.
+
+Every field has a one-line doc under it; ``python -m pusht.dreamer --help`` prints them. The
+defaults are the chapter's defaults. Fields marked *page* are fixed by the chapter page; the rest
+the page leaves open, and the comment says why we chose the value.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, fields
+from pathlib import Path
+
+
+@dataclass
+class Config:
+    seed: int = 0
+    """Master seed: data collection, model init, imagination sampling and evaluation starts."""
+    out: Path = Path("runs/seed0")
+    """Folder for metrics.json, history.npz and timing.json."""
+    smoke: bool = False
+    """Tiny config that runs in a few seconds (for CI and quick checks); see SMOKE below."""
+    device: str = "cpu"
+    """Torch device. Results are recorded (and reproducible bit for bit) on the CPU."""
+    threads: int = 1
+    """Torch CPU threads. One is faster at these sizes and keeps the float sums in a fixed order."""
+
+    # --- data: 3.1's scripted-expert sequences ---------------------------------------------------
+    n_episodes: int = 300
+    """Expert sequences to train the world model on, each from a fresh random start."""
+    seq_len: int = 16
+    """Steps per sequence (1.6 s). 3.1's recipe: the start of an expert episode, mostly the pusher
+    travelling to the block and the first pushes, which is why the model learns the pusher best."""
+    n_val_episodes: int = 60
+    """Held-out expert sequences for the model-versus-copy-last measurement."""
+
+    # --- world model (3.1's, deterministic latent) -----------------------------------------------
+    latent_dim: int = 16
+    """Size of the latent z."""
+    hidden_dim: int = 64
+    """Size of the GRU state h, and the width of every hidden layer (world model and agent)."""
+    embed_dim: int = 32
+    """Size of the encoder's embedding of one observation."""
+    wm_epochs: int = 30
+    """Passes over the expert sequences. Reconstruction has flattened by then (see notebook 01)."""
+    wm_lr: float = 3e-3
+    """Adam learning rate of the world model."""
+    batch_size: int = 32
+    """Sequences per world-model update."""
+
+    # --- learning in imagination (page: actor_lr, imag_iters) ----------------------------------
+    context: int = 2
+    """Real transitions filtered into (h, z) before each dream starts (the GRU settles in a few)."""
+    imag_iters: int = 400
+    """Actor-critic updates, each on a fresh batch of dreams (page: 400)."""
+    imag_batch: int = 64
+    """Dreams per update."""
+    imag_horizon: int = 15
+    """Steps the actor dreams per update (1.5 s of imagined time)."""
+    actor_lr: float = 1e-4
+    """Adam learning rate of actor and critic (page: 1e-4; the pathwise gradient is high-variance)."""
+    gamma: float = 0.99
+    """Discount per 0.1 s step."""
+    lam: float = 0.95
+    """Lambda of the lambda-return: 0 trusts the critic after one step, 1 the whole dream."""
+    ent_coef: float = 3e-4
+    """Weight of the entropy bonus (DreamerV3's value)."""
+    monitor_every: int = 100
+    """Measure the current policy in the REAL sim every this many iterations (the "real floor")."""
+    monitor_episodes: int = 10
+    """Real starts per monitoring point (disjoint from the evaluation starts)."""
+
+    # --- evaluation: the same policy in two worlds (page: 30 held-out starts) ------------------
+    eval_episodes: int = 30
+    """Held-out starts, never seen in training data."""
+    eval_horizon: int = 100
+    """Steps per evaluation rollout (10 s), in the dream and in the real sim."""
+
+    def validate(self) -> None:
+        """Raise ValueError naming the first field that makes no sense."""
+        positive = ["n_episodes", "seq_len", "n_val_episodes", "latent_dim", "hidden_dim",
+                    "embed_dim", "batch_size", "imag_iters", "imag_batch", "imag_horizon",
+                    "eval_episodes", "eval_horizon", "monitor_every", "monitor_episodes", "threads"]
+        for name in positive:
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} must be at least 1, got {getattr(self, name)}")
+        for name in ["wm_epochs", "context"]:
+            if getattr(self, name) < 0:
+                raise ValueError(f"{name} must be 0 or more, got {getattr(self, name)}")
+        for name in ["wm_lr", "actor_lr"]:
+            v = getattr(self, name)
+            if not (v > 0 and v < 1):
+                raise ValueError(f"{name} must be in (0, 1), got {v}")
+        if not 0 < self.gamma <= 1:
+            raise ValueError(f"gamma must be in (0, 1], got {self.gamma}")
+        if not 0 <= self.lam <= 1:
+            raise ValueError(f"lam must be in [0, 1], got {self.lam}")
+        if self.ent_coef < 0:
+            raise ValueError(f"ent_coef must be 0 or more, got {self.ent_coef}")
+        if self.context >= self.seq_len:
+            raise ValueError(f"context ({self.context}) must be shorter than seq_len ({self.seq_len})")
+
+    def to_dict(self) -> dict:
+        d = dataclasses.asdict(self)
+        d["out"] = str(self.out)
+        return d
+
+    def replace(self, **changes) -> "Config":
+        return dataclasses.replace(self, **changes)
+
+
+# A run of a few seconds that still exercises every stage. Applied by --smoke before any flag the
+# user gave explicitly.
+SMOKE = dict(n_episodes=40, n_val_episodes=10, wm_epochs=3, imag_iters=20, imag_batch=16,
+             monitor_every=10, monitor_episodes=3, eval_episodes=4, eval_horizon=20)
+
+
+def make_config(smoke: bool = False, **overrides) -> Config:
+    """The default config, or the smoke one, with ``overrides`` on top; validated."""
+    base = {**(SMOKE if smoke else {}), **overrides}
+    cfg = Config(smoke=smoke, **base)
+    if not isinstance(cfg.out, Path):
+        cfg.out = Path(cfg.out)
+    cfg.validate()
+    return cfg
+
+
+def field_docs() -> dict[str, str]:
+    """Field name -> its doc line, read from this file's source (the CLI's help text)."""
+    import ast
+    import inspect
+
+    tree = ast.parse(inspect.getsource(Config))
+    docs, body = {}, tree.body[0].body
+    for node, nxt in zip(body, body[1:]):
+        if isinstance(node, ast.AnnAssign) and isinstance(nxt, ast.Expr) and isinstance(nxt.value, ast.Constant):
+            docs[node.target.id] = " ".join(str(nxt.value.value).split())
+    return docs
+
+
+CONFIG_FIELDS = [f.name for f in fields(Config)]

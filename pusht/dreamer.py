@@ -1,0 +1,225 @@
+"""The chapter's whole pipeline in one command.
+
+    python -m pusht.dreamer --seed 0 --out runs/seed0
+
+1. collect scripted-expert sequences (3.1's data);
+2. train the world model on them, measure it against copy-last, freeze it;
+3. train an actor-critic purely inside the frozen model (``imagination.py``);
+4. deploy the same policy in the dream and in the real sim (``evaluate.py``);
+5. write ``metrics.json`` (the chapter's keys plus the controls), ``history.npz`` (curves) and
+   ``timing.json`` (wall-clock per phase, kept apart so metrics stay bit-reproducible).
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import json
+import sys
+import time
+from dataclasses import dataclass, fields
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from .agent import ActorCritic
+from .config import Config, field_docs, make_config
+from .data import EVAL_SEED_BASE, MONITOR_SEED_BASE, load_expert_data, start_seeds
+from .env import ACT_DIM, OBS_DIM, OBS_NAMES
+from .evaluate import policy_of, real_rollout, two_world_eval
+from .imagination import train_in_imagination
+from .world_model import WorldModel, prediction_error_vs_copy_last, train_world_model
+
+# Metric keys the chapter page records, in its order.
+PAGE_KEYS = ["eval_episodes", "eval_horizon", "final_imagined_reward_per_step_train", "gamma",
+             "hidden_dim", "imag_horizon", "imag_iters", "imagination_gap", "imagined_final_tee_dist",
+             "imagined_return_per_step", "latent_dim", "real_final_tee_dist", "real_return_per_step",
+             "real_success_rate", "seed", "smoke"]
+PUSHER_DIMS, BLOCK_DIMS = (0, 1), (2, 3, 4, 5)
+
+
+@dataclass
+class RunResult:
+    """Everything a notebook needs from one run."""
+
+    cfg: Config
+    metrics: dict
+    history: dict          # wm losses, imagination curves, monitor points
+    wm_error: dict         # prediction_error_vs_copy_last on held-out sequences
+    rollouts: dict         # evaluate.Rollout per world
+    wm: WorldModel
+    agent: ActorCritic
+    init_agent: ActorCritic
+    data: object           # data.ExpertData
+    timing: dict
+
+
+def run(cfg: Config, cache_dir=None, log=print, progress=None) -> RunResult:
+    """Run the whole chapter for one config. ``cache_dir`` caches expert data (None: no cache).
+
+    ``log`` receives the progress lines (``None`` silences them); ``progress`` wraps the long loops
+    (pass ``tqdm.auto.tqdm`` in a notebook).
+    """
+    cfg.validate()
+    torch.set_num_threads(cfg.threads)
+    device = torch.device(cfg.device)
+    timing, t0 = {}, time.perf_counter()
+
+    data = load_expert_data(cfg.seed, cfg.n_episodes, cfg.n_val_episodes, cfg.seq_len, cache_dir)
+    T = data.torch(device)
+    mean, std = T["mean"], T["std"]
+    timing["data_s"] = time.perf_counter() - t0
+
+    # Step 1: learn the simulator (3.1's world model), then freeze it.
+    t1 = time.perf_counter()
+    torch.manual_seed(cfg.seed)            # model init reproducible, independent of data collection
+    gen = torch.Generator().manual_seed(cfg.seed)
+    wm = WorldModel(OBS_DIM, ACT_DIM, cfg.latent_dim, cfg.hidden_dim, cfg.embed_dim).to(device)
+    wm_hist = train_world_model(wm, T["train_obs"], T["train_act"], cfg, gen,
+                                progress=_wrap(progress, "world model"), log=log)
+    wm.eval()
+    wm_error = prediction_error_vs_copy_last(wm.cpu(), T["val_obs"].cpu(), T["val_act"].cpu(),
+                                             std.cpu(), cfg.context)
+    wm.to(device)
+    timing["world_model_s"] = time.perf_counter() - t1
+
+    # Step 2: an actor-critic learns purely inside the frozen dream.
+    t2 = time.perf_counter()
+    agent = ActorCritic(cfg.hidden_dim + cfg.latent_dim, ACT_DIM, cfg.hidden_dim).to(device)
+    init_agent = copy.deepcopy(agent)
+    monitor_seeds = start_seeds(MONITOR_SEED_BASE, cfg.seed, cfg.monitor_episodes)
+
+    def monitor(a):
+        roll = real_rollout(wm, policy_of(a), monitor_seeds, cfg.eval_horizon, mean, std)
+        return float(roll.return_per_step.mean())
+
+    starts_obs = T["train_obs"][:, : cfg.context + 1]
+    starts_act = T["train_act"][:, : cfg.context]
+    imag_hist = train_in_imagination(wm, agent, starts_obs, starts_act, mean, std, cfg, gen,
+                                     monitor=monitor, progress=_wrap(progress, "imagination"), log=log)
+    timing["imagination_s"] = time.perf_counter() - t2
+
+    # Step 3: the same policy in two worlds.
+    t3 = time.perf_counter()
+    eval_seeds = start_seeds(EVAL_SEED_BASE, cfg.seed, cfg.eval_episodes)
+    ev, rollouts = two_world_eval(wm, agent, init_agent, eval_seeds, cfg.eval_horizon, mean, std)
+    timing["eval_s"] = time.perf_counter() - t3
+    timing["total_s"] = time.perf_counter() - t0
+
+    k = min(20, len(imag_hist["imag_reward"]))
+    metrics = {
+        "eval_episodes": cfg.eval_episodes, "eval_horizon": cfg.eval_horizon,
+        "final_imagined_reward_per_step_train": float(imag_hist["imag_reward"][-1]),
+        "gamma": cfg.gamma, "hidden_dim": cfg.hidden_dim, "imag_horizon": cfg.imag_horizon,
+        "imag_iters": cfg.imag_iters, "latent_dim": cfg.latent_dim, "seed": cfg.seed,
+        "smoke": bool(cfg.smoke),
+        **ev,
+        "imagined_reward_first20_train": float(imag_hist["imag_reward"][:k].mean()),
+        "imagined_reward_last20_train": float(imag_hist["imag_reward"][-k:].mean()),
+        "real_reward_monitor_first": float(imag_hist["monitor_real_reward"][0]),
+        "real_reward_monitor_last": float(imag_hist["monitor_real_reward"][-1]),
+        "wm_final_recon_loss": float(wm_hist["recon"][-1]),
+        "wm_final_dyn_loss": float(wm_hist["dyn"][-1]),
+    }
+    for kind in ("one_step", "open_loop"):
+        ratio = wm_error[f"{kind}_model"] / np.maximum(wm_error[f"{kind}_copy"], 1e-12)
+        for d, name in enumerate(OBS_NAMES):
+            metrics[f"wm_{kind}_ratio_{name}"] = float(ratio[d])
+    metrics = {k: _round(v) for k, v in metrics.items()}
+    history = {**{f"wm_{k}": v for k, v in wm_hist.items()}, **imag_hist}
+    return RunResult(cfg, metrics, history, wm_error, rollouts, wm, agent, init_agent, data, timing)
+
+
+def _round(v):
+    return round(v, 6) if isinstance(v, float) else v
+
+
+def _wrap(progress, desc):
+    return (lambda it: progress(it, desc=desc, leave=False)) if progress else None
+
+
+def save(result: RunResult, out: Path) -> None:
+    """Write metrics.json, config.json, history.npz and timing.json into ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "metrics.json").write_text(json.dumps(result.metrics, indent=2, sort_keys=True) + "\n")
+    (out / "config.json").write_text(json.dumps(result.cfg.to_dict(), indent=2) + "\n")
+    (out / "timing.json").write_text(json.dumps({k: round(v, 3) for k, v in result.timing.items()},
+                                                indent=2) + "\n")
+    np.savez(out / "history.npz", **result.history)
+
+
+def report(m: dict, log=print) -> None:
+    """Print the imagination-gap block, as the chapter shows it."""
+    log(f"\n=== the imagination gap ({m['eval_episodes']} held-out starts, "
+        f"{m['eval_horizon']}-step rollouts) ===")
+    log(f"IMAGINED return/step (in the dream) : {m['imagined_return_per_step']:+.4f}   "
+        f"final tee-dist {m['imagined_final_tee_dist']:.3f} m")
+    log(f"REAL     return/step (true PushT)   : {m['real_return_per_step']:+.4f}   "
+        f"final tee-dist {m['real_final_tee_dist']:.3f} m  (spawned {m['spawn_tee_dist']:.3f} m away)")
+    verdict = ("<- the dream is rosier than reality" if m["imagination_gap"] > 0.02
+               else "<- imagined and real roughly agree")
+    log(f"gap (imagined - real)               : {m['imagination_gap']:+.4f}   {verdict}")
+    log(f"real task success rate              : {m['real_success_rate']:.2f}")
+    log("controls, same dream, same starts   : "
+        f"zero actions {m['zero_action_dream_return_per_step']:+.4f} "
+        f"({m['zero_action_dream_final_tee_dist']:.3f} m),  untrained actor "
+        f"{m['untrained_actor_dream_return_per_step']:+.4f} "
+        f"({m['untrained_actor_dream_final_tee_dist']:.3f} m)")
+    log(f"what the real policy did            : block moved {m['real_block_displacement']:.3f} m "
+        f"on average; pusher touched the block in {m['real_episodes_touching_block']}"
+        f"/{m['eval_episodes']} episodes")
+
+
+# --- command line ------------------------------------------------------------------------------
+def build_parser() -> argparse.ArgumentParser:
+    docs = field_docs()
+    p = argparse.ArgumentParser(prog="python -m pusht.dreamer", description=__doc__.split("\n\n")[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    defaults = Config()
+    for f in fields(Config):
+        default = getattr(defaults, f.name)
+        if f.name == "smoke":
+            p.add_argument("--smoke", action="store_true", help=docs.get("smoke"))
+            continue
+        kind = {bool: None, int: int, float: float, str: str}.get(type(default), Path)
+        # default=None marks "not given", so --smoke can fill in only what the user left alone.
+        p.add_argument(f"--{f.name}", type=kind, default=None, help=f"{docs.get(f.name, '')} "
+                       f"(default: {default})")
+    p.add_argument("--cache", type=Path, default=None,
+                   help="folder for cached expert data (default: $PUSHT_CACHE or ~/.cache/pusht-dreamer)")
+    p.add_argument("--no-cache", action="store_true", help="always collect expert data afresh")
+    p.add_argument("--quiet", action="store_true", help="print only the final report")
+    return p
+
+
+def parse_config(argv=None):
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    given = {f.name: getattr(args, f.name) for f in fields(Config)
+             if f.name != "smoke" and getattr(args, f.name) is not None}
+    try:
+        cfg = make_config(smoke=args.smoke, **given)
+        if cfg.device != "cpu":
+            torch.empty(0, device=cfg.device)   # fail here, with usage, if the device is unusable
+    except (ValueError, RuntimeError) as e:
+        parser.error(str(e).splitlines()[0])
+    return cfg, args
+
+
+def main(argv=None) -> int:
+    cfg, args = parse_config(argv)
+    from .data import default_cache_dir
+    cache = None if args.no_cache else (args.cache or default_cache_dir())
+    log = None if args.quiet else print
+    result = run(cfg, cache_dir=cache, log=log)
+    save(result, cfg.out)
+    report(result.metrics)
+    print(f"\nmetrics: {cfg.out / 'metrics.json'}  (imagination gap "
+          f"{result.metrics['imagination_gap']:+.4f} return/step; real success "
+          f"{result.metrics['real_success_rate']:.2f}; {result.timing['total_s']:.1f} s)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

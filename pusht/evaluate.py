@@ -1,0 +1,165 @@
+"""The headline: deploy the SAME deterministic policy in two worlds and compare.
+
+* DREAM: filter the start frame into (h, z), then roll the prior forward under the policy for
+  ``horizon`` steps, decode every state, score the decoded T pose.
+* REAL: at every step filter (h, z) on the TRUE frame, act, step the real pymunk sim, score the
+  true T pose with the same reward function. Success is the env's own flag.
+
+All starts run as one batch: one torch call per step for all of them, which is what makes the
+evaluation cheap (at these sizes the cost is per operation, not per number).
+
+Two control dreams tell the actor's exploitation apart from the model's own drift: the same dream
+driven by zero actions, and by the untrained (initial) actor. The target sits where the expert data
+usually leaves the block, so a model that loses track of the block may decode it near the target
+all by itself.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from .env import PUSHER_RADIUS, PushTEnv, distance_to_tee, obs_to_pose
+from .reward import reward_from_obs
+
+
+@dataclass
+class Rollout:
+    """One batch of trajectories in one world, in physical units."""
+
+    obs: np.ndarray       # (T+1, B, 6) metres; in a dream, obs[0] is the decoded start frame
+    actions: np.ndarray   # (T, B, 2)
+    rewards: np.ndarray   # (T, B) reward per step on arrival; NaN after an episode ended
+    pos_err: np.ndarray   # (T, B) metres, same masking
+    success: np.ndarray   # (B,) bool (always False in a dream: the env's flag exists only in reality)
+
+    @property
+    def return_per_step(self) -> np.ndarray:
+        """(B,) mean reward per step over the steps each episode lasted."""
+        return np.nanmean(self.rewards, axis=0)
+
+    @property
+    def final_tee_dist(self) -> np.ndarray:
+        """(B,) block-to-target distance (m) at each episode's last step."""
+        _, tee = obs_to_pose(self.obs[-1])
+        return np.linalg.norm(tee[:, :2], axis=-1)
+
+
+def policy_of(agent):
+    """The deterministic policy of an ActorCritic: state -> tanh(mean)."""
+    return lambda state: agent.act(state, sample=False)[0]
+
+
+def zero_policy(state):
+    """A control: never move the pusher."""
+    return state.new_zeros(state.shape[0], 2)
+
+
+def _to_np(x):
+    return x.detach().cpu().numpy().astype(np.float64)
+
+
+@torch.no_grad()
+def dream_rollout(wm, policy, obs0: np.ndarray, horizon: int, mean, std) -> Rollout:
+    """Warm (h, z) on the start frames ``obs0`` (B, 6, metres) and dream ``horizon`` steps."""
+    norm0 = torch.as_tensor((obs0 - _to_np(mean)) / _to_np(std), dtype=torch.float32, device=mean.device)
+    h, _ = wm._init(len(obs0))
+    z = wm.filter_step(h, norm0)
+    hs, zs, acts = [h], [z], []
+    for _ in range(horizon):
+        a = policy(torch.cat([h, z], dim=-1))
+        h, z = wm.img_step(h, z, a)
+        hs.append(h)
+        zs.append(z)
+        acts.append(a)
+    norm = wm.decode(torch.stack(hs), torch.stack(zs))                     # (T+1, B, D)
+    r, pos, _ = reward_from_obs(norm[1:], mean, std)
+    return Rollout(obs=_to_np(norm * std + mean), actions=_to_np(torch.stack(acts)),
+                   rewards=_to_np(r), pos_err=_to_np(pos), success=np.zeros(len(obs0), dtype=bool))
+
+
+@torch.no_grad()
+def real_rollout(wm, policy, seeds, horizon: int, mean, std) -> Rollout:
+    """Run the policy in the real sim from ``env.reset(seed)`` for each seed, all in lockstep."""
+    envs = [PushTEnv() for _ in seeds]
+    B = len(envs)
+    obs = np.zeros((horizon + 1, B, 6))
+    obs[0] = [env.reset(s) for env, s in zip(envs, seeds)]
+    actions = np.zeros((horizon, B, 2))
+    alive = np.ones((horizon, B), dtype=bool)     # alive[t]: the episode was still running at step t
+    success = np.zeros(B, dtype=bool)
+    mean_np, std_np = _to_np(mean), _to_np(std)
+    h, _ = wm._init(B)
+    live = np.ones(B, dtype=bool)
+    for t in range(horizon):
+        norm = torch.as_tensor((obs[t] - mean_np) / std_np, dtype=torch.float32, device=mean.device)
+        z = wm.filter_step(h, norm)
+        a = policy(torch.cat([h, z], dim=-1))
+        actions[t] = _to_np(a)
+        obs[t + 1] = obs[t]
+        alive[t] = live
+        for i in np.flatnonzero(live):
+            obs[t + 1, i], _, done, info = envs[i].step(actions[t, i])
+            success[i] = info["success"]
+            live[i] = not done
+        h = wm.gru(torch.cat([z, a], dim=-1), h)
+    norm_next = torch.as_tensor((obs[1:] - mean_np) / std_np, dtype=torch.float32, device=mean.device)
+    r, pos, _ = reward_from_obs(norm_next, mean, std)      # the SAME reward function, true states
+    r, pos = _to_np(r), _to_np(pos)
+    r[~alive], pos[~alive] = np.nan, np.nan
+    return Rollout(obs=obs, actions=actions, rewards=r, pos_err=pos, success=success)
+
+
+def pusher_gap(rollout: Rollout) -> np.ndarray:
+    """(T+1, B) free space (m) between the pusher's rim and the T; about 0 means touching."""
+    pusher, tee = obs_to_pose(rollout.obs)
+    return distance_to_tee(pusher, tee) - PUSHER_RADIUS
+
+
+TOUCH_TOL = 0.003   # m: a rim within 3 mm of the T counts as a touch
+
+
+def two_world_eval(wm, agent, init_agent, seeds, horizon: int, mean, std) -> tuple[dict, dict]:
+    """Evaluate ``agent`` in the dream and in reality on the same starts, plus two control dreams.
+
+    Returns ``(metrics, rollouts)``: metrics is a flat dict of floats, rollouts maps
+    ``"dream"``, ``"real"``, ``"dream_zero"`` and ``"dream_untrained"`` to ``Rollout``.
+    """
+    was_training = agent.training
+    agent.eval()
+    real = real_rollout(wm, policy_of(agent), seeds, horizon, mean, std)
+    obs0 = real.obs[0]
+    rollouts = {
+        "dream": dream_rollout(wm, policy_of(agent), obs0, horizon, mean, std),
+        "real": real,
+        "dream_zero": dream_rollout(wm, zero_policy, obs0, horizon, mean, std),
+        "dream_untrained": dream_rollout(wm, policy_of(init_agent), obs0, horizon, mean, std),
+    }
+    agent.train(was_training)
+
+    dream = rollouts["dream"]
+    imag_return = float(dream.return_per_step.mean())
+    real_return = float(real.return_per_step.mean())
+    _, tee = obs_to_pose(real.obs)
+    spawn = np.linalg.norm(tee[0, :, :2], axis=-1)
+    moved = np.linalg.norm(tee[-1, :, :2] - tee[0, :, :2], axis=-1)
+    min_gap = np.nanmin(pusher_gap(real), axis=0)
+    metrics = {
+        "imagined_return_per_step": imag_return,
+        "real_return_per_step": real_return,
+        "imagination_gap": imag_return - real_return,
+        "imagined_final_tee_dist": float(dream.final_tee_dist.mean()),
+        "real_final_tee_dist": float(real.final_tee_dist.mean()),
+        "real_success_rate": float(real.success.mean()),
+        "spawn_tee_dist": float(spawn.mean()),
+        "real_block_displacement": float(moved.mean()),
+        "real_block_displacement_max": float(moved.max()),
+        "real_pusher_min_gap": float(min_gap.mean()),
+        "real_episodes_touching_block": int((min_gap < TOUCH_TOL).sum()),
+    }
+    for name, key in (("zero_action", "dream_zero"), ("untrained_actor", "dream_untrained")):
+        metrics[f"{name}_dream_return_per_step"] = float(rollouts[key].return_per_step.mean())
+        metrics[f"{name}_dream_final_tee_dist"] = float(rollouts[key].final_tee_dist.mean())
+    return metrics, rollouts

@@ -1,0 +1,116 @@
+"""Learning a policy inside the frozen world model: the Dreamer move.
+
+Every gradient the actor sees comes from a dream. Each update:
+
+1. take real expert sequences, filter ``context + 1`` true frames into start states (h, z);
+2. roll the FROZEN prior forward ``imag_horizon`` steps under the actor's own sampled actions;
+3. decode every dreamed state and score it with the analytic reward (``reward.py``);
+4. mix those rewards with the critic's bootstrap into Dreamer's lambda-return;
+5. the actor maximises the return by backpropagating through the frozen model (pathwise
+   gradient); the critic regresses on the detached return.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+from torch import nn
+
+from .reward import reward_from_obs
+
+
+def lambda_return(rewards: torch.Tensor, values: torch.Tensor, gamma: float, lam: float) -> torch.Tensor:
+    """Dreamer's lambda-return, computed backwards from the horizon.
+
+    ``G_t = r_t + gamma * ((1 - lam) * V_{t+1} + lam * G_{t+1})``, with ``G_H = V_H``.
+
+    ``rewards`` (H, B): the reward on arriving in state t+1. ``values`` (H+1, B): critic values of
+    states 0..H. Returns (H, B). ``lam = 0`` gives one-step TD targets, ``lam = 1`` the discounted
+    dream return bootstrapped only at the horizon.
+    """
+    if values.shape[0] != rewards.shape[0] + 1:
+        raise ValueError(f"values needs one more step than rewards (H+1 vs H); got "
+                         f"{tuple(values.shape)} and {tuple(rewards.shape)}")
+    out, last = [], values[-1]
+    for t in reversed(range(rewards.shape[0])):
+        last = rewards[t] + gamma * ((1 - lam) * values[t + 1] + lam * last)
+        out.append(last)
+    return torch.stack(out[::-1])
+
+
+def freeze(module: nn.Module) -> nn.Module:
+    """Stop a module's parameters from learning; gradients still flow *through* it."""
+    for p in module.parameters():
+        p.requires_grad_(False)
+    return module
+
+
+def imagine(wm, agent, h, z, horizon: int):
+    """Roll the prior under the actor's sampled actions. Returns states (H+1, B, S), decoded
+    normalised observations (H, B, D) and the actor's entropy (scalar).
+
+    Decoding happens once for the whole rollout (one batched call instead of H): the same numbers,
+    fewer tiny operations.
+    """
+    hs, zs = [h], [z]
+    for _ in range(horizon):
+        action, entropy = agent.act(torch.cat([h, z], dim=-1), sample=True)   # (B, A)
+        h, z = wm.img_step(h, z, action)
+        hs.append(h)
+        zs.append(z)
+    hs, zs = torch.stack(hs), torch.stack(zs)                                # (H+1, B, .)
+    obs_pred = wm.decode(hs[1:], zs[1:])                                     # (H, B, D)
+    return torch.cat([hs, zs], dim=-1), obs_pred, entropy
+
+
+def train_in_imagination(wm, agent, starts_obs, starts_act, mean, std, cfg, gen: torch.Generator,
+                         monitor=None, progress=None, log=print):
+    """Train ``agent`` purely in dreams of the frozen ``wm``. Returns the training history.
+
+    ``starts_obs`` (N, C+1, D) and ``starts_act`` (N, C, A): normalised real frames to warm the
+    start states from. ``monitor(agent) -> float``, if given, is called every
+    ``cfg.monitor_every`` iterations and at the last one, and should return the policy's mean
+    reward per step in the REAL sim: it only watches, no gradient ever comes from it.
+    History: ``imag_reward`` (per-step imagined reward, every iteration), ``critic_loss``,
+    ``log_std``, and ``monitor_iters``/``monitor_real_reward``.
+    """
+    freeze(wm)
+    opt = torch.optim.Adam(agent.parameters(), lr=cfg.actor_lr, fused=True)
+    hist = {"imag_reward": [], "critic_loss": [], "log_std": [], "monitor_iters": [],
+            "monitor_real_reward": []}
+    with torch.no_grad():   # real start states are data: filter them once, not every update
+        starts_h, starts_z = wm.warm(starts_obs, starts_act)
+    iters = range(cfg.imag_iters)
+    for it in (progress(iters) if progress else iters):
+        if monitor is not None and it % cfg.monitor_every == 0:
+            hist["monitor_iters"].append(it)
+            hist["monitor_real_reward"].append(monitor(agent))
+        idx = torch.randint(len(starts_obs), (cfg.imag_batch,), generator=gen)
+        states, obs_pred, entropy = imagine(wm, agent, starts_h[idx], starts_z[idx], cfg.imag_horizon)
+        rewards = reward_from_obs(obs_pred, mean, std)[0]                     # (H, B)
+
+        # Two stop-gradients keep the objectives apart. The critic regresses V(state) on the
+        # return, so it sees detached states (it must not steer the actor through them). The
+        # actor maximises the return, so the critic's bootstrap inside the return is detached
+        # (the actor must not learn by inflating the critic). The actor's gradient therefore
+        # arrives only along the imagined-reward path, through the frozen dynamics.
+        values = agent.value(states.detach())                                # (H+1, B)
+        returns = lambda_return(rewards, values.detach(), cfg.gamma, cfg.lam)  # (H, B)
+        actor_loss = -(returns.mean() + cfg.ent_coef * entropy)
+        critic_loss = 0.5 * F.mse_loss(values[:-1], returns.detach())
+        opt.zero_grad()
+        (actor_loss + critic_loss).backward()
+        nn.utils.clip_grad_norm_(agent.parameters(), 100.0)
+        opt.step()
+
+        hist["imag_reward"].append(rewards.mean().item())
+        hist["critic_loss"].append(critic_loss.item())
+        hist["log_std"].append(agent.log_std.mean().item())
+        if log and (it % max(cfg.imag_iters // 5, 1) == 0 or it == cfg.imag_iters - 1):
+            log(f"[imag] iter {it:4d}  imagined reward/step {hist['imag_reward'][-1]:+.4f}  "
+                f"critic {hist['critic_loss'][-1]:.4f}")
+    if monitor is not None:
+        hist["monitor_iters"].append(cfg.imag_iters)
+        hist["monitor_real_reward"].append(monitor(agent))
+    return {k: np.array(v) for k, v in hist.items()}

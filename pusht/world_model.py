@@ -1,0 +1,154 @@
+"""3.1's world model: encoder, GRU, prior, posterior, decoder, with a deterministic latent.
+
+The state is a pair: ``h`` (the GRU's memory of the past) and ``z`` (a latent for the present).
+
+* filtering on real frames:  ``z_t = posterior(h_t, encoder(o_t))``,  ``h_{t+1} = gru([z_t, a_t], h_t)``
+* dreaming, no frames:       ``h_{t+1} = gru([z_t, a_t], h_t)``,      ``z_{t+1} = prior(h_{t+1})``
+* either way, an observation: ``o_hat = decoder(h, z)``
+
+Training (``observe``) filters real sequences and minimises two losses: reconstruction (decode each
+filtered state back to its frame) and dynamics (the prior, which never sees the frame, must predict
+the posterior's latent from ``h`` alone). The dynamics loss is what makes dreaming possible: in a
+dream only the prior is available.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+from torch import nn
+
+
+def mlp(inp: int, hidden: int, out: int, final: nn.Module | None = None) -> nn.Sequential:
+    """One hidden layer: the world model is deliberately tiny."""
+    layers = [nn.Linear(inp, hidden), nn.ReLU(), nn.Linear(hidden, out)]
+    return nn.Sequential(*layers, *([final] if final is not None else []))
+
+
+class WorldModel(nn.Module):
+    def __init__(self, obs_dim: int, act_dim: int, latent_dim: int, hidden_dim: int, embed_dim: int):
+        super().__init__()
+        self.latent_dim, self.hidden_dim = latent_dim, hidden_dim
+        self.encoder = mlp(obs_dim, hidden_dim, embed_dim)
+        # tanh keeps both latents in [-1, 1], so the dynamics loss cannot shrink by rescaling z.
+        self.posterior = mlp(hidden_dim + embed_dim, hidden_dim, latent_dim, nn.Tanh())
+        self.prior = mlp(hidden_dim, hidden_dim, latent_dim, nn.Tanh())
+        self.gru = nn.GRUCell(latent_dim + act_dim, hidden_dim)
+        self.decoder = mlp(hidden_dim + latent_dim, hidden_dim, obs_dim)
+
+    # --- the pieces --------------------------------------------------------------------------
+    def _init(self, batch: int):
+        """Zero state (h, z) for ``batch`` sequences."""
+        w = self.prior[0].weight
+        return w.new_zeros(batch, self.hidden_dim), w.new_zeros(batch, self.latent_dim)
+
+    def filter_step(self, h, norm_obs):
+        """Posterior latent of a real (normalised) frame given the memory h: (B, D) -> (B, Z)."""
+        return self.posterior(torch.cat([h, self.encoder(norm_obs)], dim=-1))
+
+    def img_step(self, h, z, action):
+        """One dreamed step without decoding: (h, z, a) -> (h', z') from the prior."""
+        h = self.gru(torch.cat([z, action], dim=-1), h)
+        return h, self.prior(h)
+
+    def decode(self, h, z):
+        """Normalised observation of state (h, z); any leading shape."""
+        return self.decoder(torch.cat([h, z], dim=-1))
+
+    def step(self, h, z, action):
+        """One dreamed step: returns (h', z', decoded normalised observation)."""
+        h, z = self.img_step(h, z, action)
+        return h, z, self.decode(h, z)
+
+    # --- on real sequences ---------------------------------------------------------------------
+    def filter(self, obs, act):
+        """Filter real sequences. obs (B, T+1, D), act (B, T, A) -> h, z of shape (B, T+1, .)."""
+        embed = self.encoder(obs)                                   # (B, T+1, E): all frames at once
+        h, _ = self._init(obs.shape[0])
+        hs, zs = [], []
+        for t in range(obs.shape[1]):
+            z = self.posterior(torch.cat([h, embed[:, t]], dim=-1))
+            hs.append(h)
+            zs.append(z)
+            if t < act.shape[1]:
+                h = self.gru(torch.cat([z, act[:, t]], dim=-1), h)
+        return torch.stack(hs, 1), torch.stack(zs, 1)
+
+    def observe(self, obs, act):
+        """The two training losses on real sequences: (recon_loss, dyn_loss), both scalars."""
+        h, z = self.filter(obs, act)                                # (B, T+1, H), (B, T+1, Z)
+        recon_loss = F.mse_loss(self.decode(h, z), obs)
+        # The prior learns to imitate the posterior; the posterior is shaped by reconstruction only.
+        dyn_loss = F.mse_loss(self.prior(h[:, 1:]), z[:, 1:].detach())
+        return recon_loss, dyn_loss
+
+    def warm(self, ctx_obs, ctx_act):
+        """Filter C+1 real frames (B, C+1, D) under C actions (B, C, A); the last (h, z)."""
+        h, z = self.filter(ctx_obs, ctx_act)
+        return h[:, -1], z[:, -1]
+
+
+def train_world_model(wm, obs, act, cfg, gen: torch.Generator, progress=None, log=print):
+    """Adam on recon + dyn over ``cfg.wm_epochs`` shuffled passes. Returns per-update losses.
+
+    ``obs`` (N, T+1, D) and ``act`` (N, T, A) are normalised tensors; ``gen`` orders the batches.
+    ``progress`` wraps the epoch range (e.g. ``tqdm``). ``log`` gets a line every 15 epochs.
+    """
+    opt = torch.optim.Adam(wm.parameters(), lr=cfg.wm_lr, fused=True)
+    recon_hist, dyn_hist = [], []
+    epochs = range(cfg.wm_epochs)
+    for epoch in (progress(epochs) if progress else epochs):
+        for batch in torch.randperm(len(obs), generator=gen).split(cfg.batch_size):
+            recon_loss, dyn_loss = wm.observe(obs[batch], act[batch])
+            opt.zero_grad()
+            (recon_loss + dyn_loss).backward()
+            opt.step()
+            recon_hist.append(recon_loss.item())
+            dyn_hist.append(dyn_loss.item())
+        if log and (epoch % 15 == 0 or epoch == cfg.wm_epochs - 1):
+            n = -(-len(obs) // cfg.batch_size)
+            log(f"[wm] epoch {epoch:3d}  recon {np.mean(recon_hist[-n:]):.5f}  "
+                f"dyn {np.mean(dyn_hist[-n:]):.5f}")
+    return {"recon": np.array(recon_hist), "dyn": np.array(dyn_hist)}
+
+
+@torch.no_grad()
+def prediction_error_vs_copy_last(wm, obs, act, std, context: int = 2):
+    """3.1's measurement: per-dimension RMSE of the model against a copy-last-frame baseline.
+
+    ``obs`` (N, T+1, D), ``act`` (N, T, A): normalised held-out sequences; ``std`` (D,) converts
+    errors back to physical units (metres for positions, unitless for sin/cos).
+
+    * one-step: filter the true frames up to t, dream one step under a_t, decode; copy-last
+      predicts o_{t+1} = o_t.
+    * open-loop: filter ``context`` + 1 frames, then dream the rest of the sequence under the true
+      actions with no frames; copy-last holds the last filtered frame.
+
+    Returns a dict of (D,) numpy arrays: ``one_step_model``, ``one_step_copy``,
+    ``open_loop_model``, ``open_loop_copy`` and the fraction of one-step transitions in which the
+    block moved more than 1 mm (``block_moving_fraction``, a scalar).
+    """
+    std = torch.as_tensor(std, dtype=obs.dtype)
+    h, _ = wm.filter(obs, act)
+    pred = wm.decode(h[:, 1:], wm.prior(h[:, 1:]))                  # (N, T, D): one-step predictions
+
+    def rmse(a, b):
+        return (((a - b) * std) ** 2).mean(dim=(0, 1)).sqrt().numpy()
+
+    one_model, one_copy = rmse(pred, obs[:, 1:]), rmse(obs[:, :-1], obs[:, 1:])
+
+    hc, zc = wm.warm(obs[:, : context + 1], act[:, :context])
+    preds = []
+    for t in range(context, act.shape[1]):
+        hc, zc, o = wm.step(hc, zc, act[:, t])
+        preds.append(o)
+    preds = torch.stack(preds, 1)                                   # (N, T-context, D)
+    target = obs[:, context + 1:]
+    last = obs[:, context: context + 1].expand_as(target)
+    block_step = ((obs[:, 1:, 2:4] - obs[:, :-1, 2:4]) * std[2:4]).norm(dim=-1)
+    return {
+        "one_step_model": one_model, "one_step_copy": one_copy,
+        "open_loop_model": rmse(preds, target), "open_loop_copy": rmse(last, target),
+        "block_moving_fraction": float((block_step > 1e-3).float().mean()),
+    }
