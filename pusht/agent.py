@@ -29,15 +29,18 @@ class ActorCritic(nn.Module):
         self.log_std = nn.Parameter(torch.zeros(act_dim))      # state-independent exploration
         self.critic = _mlp(state_dim, hidden_dim, 1)
 
-    def act(self, state: torch.Tensor, sample: bool = True):
+    def act(self, state: torch.Tensor, sample: bool = True, noise: torch.Tensor | None = None):
         """(B, S) -> (action (B, A) in [-1, 1], entropy of the pre-tanh Gaussian, a scalar).
 
-        ``sample=False`` returns ``tanh(mean)``: the deterministic policy used for evaluation in
-        both worlds.
+        A sample is ``tanh(mean + std * noise)`` with standard-normal ``noise`` (drawn here unless
+        given). ``sample=False`` returns ``tanh(mean)``: the deterministic policy used for
+        evaluation in both worlds.
         """
         mean = self.actor(state)
-        pre = mean + torch.exp(self.log_std) * torch.randn_like(mean) if sample else mean
-        return torch.tanh(pre), self.entropy()
+        if sample:
+            noise = torch.randn_like(mean) if noise is None else noise
+            mean = mean + torch.exp(self.log_std) * noise
+        return torch.tanh(mean), self.entropy()
 
     def entropy(self) -> torch.Tensor:
         """Entropy (nats) of the diagonal Gaussian before the tanh; depends on log_std only."""

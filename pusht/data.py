@@ -35,8 +35,9 @@ def collect_sequences(seeds, seq_len: int):
     """Run the expert from each start for ``seq_len`` steps, all envs in lockstep.
 
     Returns ``obs`` (N, seq_len+1, 6) and ``act`` (N, seq_len, 2), float64. An episode that
-    succeeds early is padded with zero actions and its unchanged final frame, which is exactly what
-    the sim would do under a zero velocity command.
+    succeeds early (rare within a few seconds of a random start) is padded with zero actions and
+    its final frame: what the sim does under a zero command, up to the few millimetres a body
+    coasts in the first 10 ms substep after a push.
     """
     envs = [PushTEnv() for _ in seeds]
     obs = np.zeros((len(seeds), seq_len + 1, OBS_DIM))

@@ -200,10 +200,13 @@ def parse_config(argv=None):
              if f.name != "smoke" and getattr(args, f.name) is not None}
     try:
         cfg = make_config(smoke=args.smoke, **given)
-        if cfg.device != "cpu":
-            torch.empty(0, device=cfg.device)   # fail here, with usage, if the device is unusable
-    except (ValueError, RuntimeError) as e:
+    except ValueError as e:
         parser.error(str(e).splitlines()[0])
+    try:
+        torch.empty(0, device=cfg.device)       # fail here, with usage, if the device is unusable
+    except Exception as e:                      # torch raises RuntimeError or AssertionError here
+        parser.error(f"--device {cfg.device} is not usable here ({str(e).splitlines()[0]}); "
+                     f"use --device cpu")
     return cfg, args
 
 

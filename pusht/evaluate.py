@@ -61,7 +61,7 @@ def _to_np(x):
     return x.detach().cpu().numpy().astype(np.float64)
 
 
-@torch.no_grad()
+@torch.inference_mode()
 def dream_rollout(wm, policy, obs0: np.ndarray, horizon: int, mean, std) -> Rollout:
     """Warm (h, z) on the start frames ``obs0`` (B, 6, metres) and dream ``horizon`` steps."""
     norm0 = torch.as_tensor((obs0 - _to_np(mean)) / _to_np(std), dtype=torch.float32, device=mean.device)
@@ -80,7 +80,7 @@ def dream_rollout(wm, policy, obs0: np.ndarray, horizon: int, mean, std) -> Roll
                    rewards=_to_np(r), pos_err=_to_np(pos), success=np.zeros(len(obs0), dtype=bool))
 
 
-@torch.no_grad()
+@torch.inference_mode()
 def real_rollout(wm, policy, seeds, horizon: int, mean, std) -> Rollout:
     """Run the policy in the real sim from ``env.reset(seed)`` for each seed, all in lockstep."""
     envs = [PushTEnv() for _ in seeds]

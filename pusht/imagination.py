@@ -47,21 +47,24 @@ def freeze(module: nn.Module) -> nn.Module:
 
 
 def imagine(wm, agent, h, z, horizon: int):
-    """Roll the prior under the actor's sampled actions. Returns states (H+1, B, S), decoded
-    normalised observations (H, B, D) and the actor's entropy (scalar).
+    """Roll the prior under the actor's sampled actions. Returns states [h, z] (H+1, B, S),
+    decoded normalised observations (H, B, D) and the actor's entropy (scalar).
 
-    Decoding happens once for the whole rollout (one batched call instead of H): the same numbers,
-    fewer tiny operations.
+    Written for speed without changing the maths of ``agent.act``: the noise for every step is
+    drawn in one call, the std and the entropy (which depend on ``log_std`` only) are computed
+    once, and all dreamed states are decoded in one batched call at the end. At these sizes the
+    cost is per operation, not per number, so fewer operations is what makes it fast.
     """
-    hs, zs = [h], [z]
-    for _ in range(horizon):
-        action, entropy = agent.act(torch.cat([h, z], dim=-1), sample=True)   # (B, A)
+    noise = torch.randn(horizon, h.shape[0], agent.log_std.shape[0], device=h.device)  # (H, B, A)
+    std = torch.exp(agent.log_std)
+    states = [torch.cat([h, z], dim=-1)]
+    for t in range(horizon):
+        action = torch.tanh(agent.actor(states[-1]) + std * noise[t])      # (B, A), reparameterised
         h, z = wm.img_step(h, z, action)
-        hs.append(h)
-        zs.append(z)
-    hs, zs = torch.stack(hs), torch.stack(zs)                                # (H+1, B, .)
-    obs_pred = wm.decode(hs[1:], zs[1:])                                     # (H, B, D)
-    return torch.cat([hs, zs], dim=-1), obs_pred, entropy
+        states.append(torch.cat([h, z], dim=-1))
+    states = torch.stack(states)                                        # (H+1, B, S)
+    obs_pred = wm.decoder(states[1:])                                   # (H, B, D) = decode(h, z)
+    return states, obs_pred, agent.entropy()
 
 
 def train_in_imagination(wm, agent, starts_obs, starts_act, mean, std, cfg, gen: torch.Generator,

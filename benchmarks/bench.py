@@ -1,0 +1,103 @@
+"""Speed figures for the chapter, printed and written to benchmarks/wallclock.csv.
+
+    python benchmarks/bench.py [--repeats 3]
+
+* env: real-sim steps per second under uniformly random actions;
+* pipeline cold: ``python -m pusht.dreamer`` at the default config, seed 0, in a fresh process
+  with no expert-data cache (process wall-clock, torch import included);
+* pipeline warm: the same with the expert data already cached on disk;
+* the per-phase split (from the run's timing.json) and the peak memory (max RSS) of the process.
+
+Speed is measured here, never asserted in a test: this machine has 2 cores and is noisy, so each
+figure is the median of ``--repeats`` runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import platform
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+
+def env_steps_per_second(n_episodes: int = 20) -> float:
+    from pusht.env import PushTEnv
+
+    env, rng, n = PushTEnv(), np.random.default_rng(0), 0
+    actions = rng.uniform(-1, 1, (n_episodes, 300, 2))
+    t = time.perf_counter()
+    for ep in range(n_episodes):
+        env.reset(ep)
+        for a in actions[ep]:
+            n += 1
+            if env.step(a)[2]:
+                break
+    return n / (time.perf_counter() - t)
+
+
+def pipeline(out: Path, cache: Path | None) -> dict:
+    """One fresh process of the default pipeline: wall-clock, peak RSS, phase split."""
+    cmd = [sys.executable, "-m", "pusht.dreamer", "--seed", "0", "--out", str(out), "--quiet"]
+    cmd += ["--cache", str(cache)] if cache else ["--no-cache"]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    t = time.perf_counter()
+    subprocess.run(cmd, check=True, cwd=ROOT, stdout=subprocess.DEVNULL,
+                   env={**os.environ, "PYTHONPATH": str(ROOT)})
+    wall = time.perf_counter() - t
+    peak_mb = max(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, before) / 1024
+    return {"wall_s": wall, "peak_mb": peak_mb, **json.loads((out / "timing.json").read_text())}
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--csv", type=Path, default=ROOT / "benchmarks" / "wallclock.csv")
+    args = p.parse_args(argv)
+
+    rows = []
+    sps = float(np.median([env_steps_per_second() for _ in range(args.repeats)]))
+    rows.append(("env_steps_per_s", sps, "steps/s", "random actions, 10 substeps each"))
+    print(f"env: {sps:,.0f} steps/s")
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        cold = [pipeline(tmp / f"cold{i}", None) for i in range(args.repeats)]
+        pipeline(tmp / "fill", tmp / "cache")                   # fill the cache once
+        warm = [pipeline(tmp / f"warm{i}", tmp / "cache") for i in range(args.repeats)]
+    for name, runs in (("cold", cold), ("warm", warm)):
+        med = {k: float(np.median([r[k] for r in runs])) for k in runs[0]}
+        print(f"pipeline {name}: {med['wall_s']:.2f} s wall (process), peak {med['peak_mb']:.0f} MB; "
+              f"data {med['data_s']:.2f} s, world model {med['world_model_s']:.2f} s, "
+              f"imagination {med['imagination_s']:.2f} s, eval {med['eval_s']:.2f} s")
+        rows.append((f"pipeline_{name}_wall", med["wall_s"], "s", "default config, seed 0, fresh process"))
+        for k in ("data_s", "world_model_s", "imagination_s", "eval_s"):
+            rows.append((f"pipeline_{name}_{k[:-2]}", med[k], "s", "in-script phase"))
+        rows.append((f"pipeline_{name}_peak_rss", med["peak_mb"], "MB", "max resident set size"))
+
+    import torch
+    stamp = datetime.now(timezone.utc).isoformat(timespec="seconds")
+    machine = f"{platform.machine()} {os.cpu_count()} cores, torch {torch.__version__} " \
+              f"({torch.backends.cpu.get_cpu_capability()})"
+    with open(args.csv, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["measured_at", "tier", "machine", "figure", "value", "unit", "notes"])
+        for name, value, unit, note in rows:
+            w.writerow([stamp, "cpu", machine, name, f"{value:.3f}", unit,
+                        f"{note}; median of {args.repeats}"])
+    print(f"wrote {args.csv}")
+
+
+if __name__ == "__main__":
+    main()
