@@ -131,6 +131,15 @@ def run(cfg: Config, cache_dir=None, log=print, progress=None) -> RunResult:
     return RunResult(cfg, metrics, history, wm_error, rollouts, wm, agent, init_agent, data, timing)
 
 
+def platform_fingerprint() -> dict:
+    """What bit-exact reproducibility of a run depends on, recorded beside its numbers."""
+    import platform
+
+    return {"torch": str(torch.__version__), "cpu_capability": torch.backends.cpu.get_cpu_capability(),
+            "machine": platform.machine(), "python": platform.python_version(),
+            "numpy": str(np.__version__)}
+
+
 def _round(v):
     return round(v, 6) if isinstance(v, float) else v
 

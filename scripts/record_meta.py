@@ -10,7 +10,6 @@ beside ours (under ``page``) so a reader can compare, never mixed into them. The
 from __future__ import annotations
 
 import argparse
-import platform
 import sys
 import time
 from pathlib import Path
@@ -23,7 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from pusht.config import make_config  # noqa: E402
-from pusht.dreamer import run  # noqa: E402
+from pusht.dreamer import platform_fingerprint, run  # noqa: E402
 
 # The chapter page's figures (seed 0 unless a range is given), for comparison only.
 PAGE = {
@@ -45,13 +44,6 @@ HEADLINE = ["imagined_return_per_step", "real_return_per_step", "imagination_gap
             "untrained_actor_dream_return_per_step", "untrained_actor_dream_final_tee_dist",
             "final_imagined_reward_per_step_train", "imagined_reward_first20_train",
             "imagined_reward_last20_train"]
-
-
-def platform_fingerprint() -> dict:
-    """What exact float reproducibility depends on."""
-    return {"torch": torch.__version__, "cpu_capability": torch.backends.cpu.get_cpu_capability(),
-            "machine": platform.machine(), "python": platform.python_version(),
-            "numpy": np.__version__}
 
 
 def acceptance(m: dict) -> dict:
