@@ -14,7 +14,9 @@ from __future__ import annotations
 
 import argparse
 import copy
+import hashlib
 import json
+import os
 import sys
 import time
 from dataclasses import dataclass, fields
@@ -28,7 +30,8 @@ from .config import Config, field_docs, make_config
 from .data import EVAL_SEED_BASE, MONITOR_SEED_BASE, load_expert_data, start_seeds
 from .env import ACT_DIM, OBS_DIM, OBS_NAMES
 from .evaluate import policy_of, real_rollout, two_world_eval
-from .imagination import train_in_imagination
+from .imagination import freeze, lambda_return, train_in_imagination
+from .reward import reward_from_obs
 from .world_model import WorldModel, prediction_error_vs_copy_last, train_world_model
 
 # Metric keys the chapter page records, in its order.
@@ -37,6 +40,28 @@ PAGE_KEYS = ["eval_episodes", "eval_horizon", "final_imagined_reward_per_step_tr
              "imagined_return_per_step", "latent_dim", "real_final_tee_dist", "real_return_per_step",
              "real_success_rate", "seed", "smoke"]
 PUSHER_DIMS, BLOCK_DIMS = (0, 1), (2, 3, 4, 5)
+
+
+@dataclass
+class WorldModelStage:
+    """Step 1's products: the data, the frozen world model, its training curves and its error."""
+
+    data: object           # data.ExpertData
+    wm: WorldModel
+    history: dict          # per-update "recon" and "dyn" losses
+    error: dict            # prediction_error_vs_copy_last on held-out sequences
+    seconds: float         # wall-clock of the whole stage
+    data_seconds: float    # ... of which collecting (or loading) the expert data
+
+
+@dataclass
+class AgentStage:
+    """Step 2's products: the trained agent, a copy of it before training, and its curves."""
+
+    agent: ActorCritic
+    init_agent: ActorCritic
+    history: dict          # imagination curves and the real-sim monitor points
+    seconds: float
 
 
 @dataclass
@@ -55,58 +80,121 @@ class RunResult:
     timing: dict
 
 
-def run(cfg: Config, cache_dir=None, log=print, progress=None) -> RunResult:
-    """Run the whole chapter for one config. ``cache_dir`` caches expert data (None: no cache).
+# Which config fields each stage depends on: the key of its on-disk cache.
+WM_FIELDS = ("seed", "device", "threads", "n_episodes", "seq_len", "n_val_episodes", "latent_dim",
+             "hidden_dim", "embed_dim", "wm_epochs", "wm_lr", "batch_size", "context")
+AGENT_FIELDS = WM_FIELDS + ("imag_iters", "imag_batch", "imag_horizon", "actor_lr", "gamma", "lam",
+                            "ent_coef", "monitor_every", "monitor_episodes", "eval_horizon")
 
+
+def _cache_path(model_cache, kind: str, cfg: Config, names) -> Path | None:
+    if model_cache is None:
+        return None
+    here = Path(__file__).parent
+    h = hashlib.sha256(json.dumps({n: str(getattr(cfg, n)) for n in names}, sort_keys=True).encode())
+    for src in sorted(here.glob("*.py")):          # any code change invalidates every cached stage
+        h.update(src.read_bytes())
+    return Path(model_cache) / f"{kind}_{h.hexdigest()[:16]}.pt"
+
+
+def _cached(path, build):
+    if path is not None and path.exists():
+        return torch.load(path, weights_only=False)
+    stage = build()
+    if path is not None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(".tmp")
+        torch.save(stage, tmp)
+        os.replace(tmp, path)
+    return stage
+
+
+def world_model_stage(cfg: Config, cache_dir=None, model_cache=None, log=print,
+                      progress=None) -> WorldModelStage:
+    """Step 1: collect expert data, train 3.1's world model, measure it against copy-last, freeze.
+
+    ``cache_dir`` caches the expert data, ``model_cache`` the whole stage (keyed by the config
+    fields it depends on and the package source), so a later notebook can reuse it.
+    """
+    def build():
+        t0 = time.perf_counter()
+        torch.set_num_threads(cfg.threads)
+        data = load_expert_data(cfg.seed, cfg.n_episodes, cfg.n_val_episodes, cfg.seq_len, cache_dir)
+        T = data.torch(cfg.device)
+        data_seconds = time.perf_counter() - t0
+        torch.manual_seed(cfg.seed)        # model init reproducible, independent of data collection
+        gen = torch.Generator().manual_seed(cfg.seed)
+        wm = WorldModel(OBS_DIM, ACT_DIM, cfg.latent_dim, cfg.hidden_dim, cfg.embed_dim).to(cfg.device)
+        hist = train_world_model(wm, T["train_obs"], T["train_act"], cfg, gen,
+                                 progress=_wrap(progress, "world model"), log=log)
+        wm.eval()
+        error = prediction_error_vs_copy_last(wm.cpu(), T["val_obs"].cpu(), T["val_act"].cpu(),
+                                              T["std"].cpu(), cfg.context)
+        return WorldModelStage(data, freeze(wm.to(cfg.device)), hist, error, time.perf_counter() - t0,
+                               data_seconds)
+
+    return _cached(_cache_path(model_cache, "wm", cfg, WM_FIELDS), build)
+
+
+def agent_stage(cfg: Config, stage: WorldModelStage, model_cache=None, log=print, progress=None,
+                reward_fn=reward_from_obs, return_fn=lambda_return) -> AgentStage:
+    """Step 2: an actor-critic learns purely inside the frozen world model of ``stage``.
+
+    Reseeded on its own, so a cached world model gives the same agent as a fresh one.
+    ``reward_fn`` and ``return_fn`` let a learner's own implementations drive the training.
+    """
+    def build():
+        t0 = time.perf_counter()
+        torch.set_num_threads(cfg.threads)
+        T = stage.data.torch(cfg.device)
+        mean, std = T["mean"], T["std"]
+        torch.manual_seed(cfg.seed + 1)
+        gen = torch.Generator().manual_seed(cfg.seed + 1)
+        agent = ActorCritic(cfg.hidden_dim + cfg.latent_dim, ACT_DIM, cfg.hidden_dim).to(cfg.device)
+        init_agent = copy.deepcopy(agent)
+        monitor_seeds = start_seeds(MONITOR_SEED_BASE, cfg.seed, cfg.monitor_episodes)
+
+        def monitor(a):   # the "real floor": the current policy in the real sim, never trained on
+            roll = real_rollout(stage.wm, policy_of(a), monitor_seeds, cfg.eval_horizon, mean, std)
+            return float(roll.return_per_step.mean())
+
+        hist = train_in_imagination(stage.wm, agent, T["train_obs"][:, : cfg.context + 1],
+                                    T["train_act"][:, : cfg.context], mean, std, cfg, gen,
+                                    monitor=monitor, progress=_wrap(progress, "imagination"),
+                                    log=log, reward_fn=reward_fn, return_fn=return_fn)
+        return AgentStage(agent, init_agent, hist, time.perf_counter() - t0)
+
+    custom = reward_fn is not reward_from_obs or return_fn is not lambda_return
+    return _cached(None if custom else _cache_path(model_cache, "agent", cfg, AGENT_FIELDS), build)
+
+
+def run(cfg: Config, cache_dir=None, model_cache=None, log=print, progress=None) -> RunResult:
+    """Run the whole chapter for one config and return everything it produced.
+
+    ``cache_dir`` caches expert data; ``model_cache`` caches the trained stages (None: no cache).
     ``log`` receives the progress lines (``None`` silences them); ``progress`` wraps the long loops
     (pass ``tqdm.auto.tqdm`` in a notebook).
     """
     cfg.validate()
-    torch.set_num_threads(cfg.threads)
-    device = torch.device(cfg.device)
-    timing, t0 = {}, time.perf_counter()
-
-    data = load_expert_data(cfg.seed, cfg.n_episodes, cfg.n_val_episodes, cfg.seq_len, cache_dir)
-    T = data.torch(device)
-    mean, std = T["mean"], T["std"]
-    timing["data_s"] = time.perf_counter() - t0
-
-    # Step 1: learn the simulator (3.1's world model), then freeze it.
-    t1 = time.perf_counter()
-    torch.manual_seed(cfg.seed)            # model init reproducible, independent of data collection
-    gen = torch.Generator().manual_seed(cfg.seed)
-    wm = WorldModel(OBS_DIM, ACT_DIM, cfg.latent_dim, cfg.hidden_dim, cfg.embed_dim).to(device)
-    wm_hist = train_world_model(wm, T["train_obs"], T["train_act"], cfg, gen,
-                                progress=_wrap(progress, "world model"), log=log)
-    wm.eval()
-    wm_error = prediction_error_vs_copy_last(wm.cpu(), T["val_obs"].cpu(), T["val_act"].cpu(),
-                                             std.cpu(), cfg.context)
-    wm.to(device)
-    timing["world_model_s"] = time.perf_counter() - t1
-
-    # Step 2: an actor-critic learns purely inside the frozen dream.
-    t2 = time.perf_counter()
-    agent = ActorCritic(cfg.hidden_dim + cfg.latent_dim, ACT_DIM, cfg.hidden_dim).to(device)
-    init_agent = copy.deepcopy(agent)
-    monitor_seeds = start_seeds(MONITOR_SEED_BASE, cfg.seed, cfg.monitor_episodes)
-
-    def monitor(a):
-        roll = real_rollout(wm, policy_of(a), monitor_seeds, cfg.eval_horizon, mean, std)
-        return float(roll.return_per_step.mean())
-
-    starts_obs = T["train_obs"][:, : cfg.context + 1]
-    starts_act = T["train_act"][:, : cfg.context]
-    imag_hist = train_in_imagination(wm, agent, starts_obs, starts_act, mean, std, cfg, gen,
-                                     monitor=monitor, progress=_wrap(progress, "imagination"), log=log)
-    timing["imagination_s"] = time.perf_counter() - t2
-
-    # Step 3: the same policy in two worlds.
+    t0 = time.perf_counter()
+    ws = world_model_stage(cfg, cache_dir, model_cache, log, progress)
+    ag = agent_stage(cfg, ws, model_cache, log, progress)
     t3 = time.perf_counter()
+    T = ws.data.torch(cfg.device)
     eval_seeds = start_seeds(EVAL_SEED_BASE, cfg.seed, cfg.eval_episodes)
-    ev, rollouts = two_world_eval(wm, agent, init_agent, eval_seeds, cfg.eval_horizon, mean, std)
-    timing["eval_s"] = time.perf_counter() - t3
-    timing["total_s"] = time.perf_counter() - t0
+    ev, rollouts = two_world_eval(ws.wm, ag.agent, ag.init_agent, eval_seeds, cfg.eval_horizon,
+                                  T["mean"], T["std"])
+    timing = {"data_s": ws.data_seconds, "world_model_s": ws.seconds - ws.data_seconds,
+              "imagination_s": ag.seconds,
+              "eval_s": time.perf_counter() - t3, "total_s": time.perf_counter() - t0}
+    return RunResult(cfg, summarize(cfg, ev, ws, ag), {**{f"wm_{k}": v for k, v in ws.history.items()},
+                                                       **ag.history},
+                     ws.error, rollouts, ws.wm, ag.agent, ag.init_agent, ws.data, timing)
 
+
+def summarize(cfg: Config, ev: dict, ws: WorldModelStage, ag: AgentStage) -> dict:
+    """metrics.json: the chapter page's keys, the controls, and the world model's error ratios."""
+    imag_hist, wm_hist, wm_error = ag.history, ws.history, ws.error
     k = min(20, len(imag_hist["imag_reward"]))
     metrics = {
         "eval_episodes": cfg.eval_episodes, "eval_horizon": cfg.eval_horizon,
@@ -126,9 +214,7 @@ def run(cfg: Config, cache_dir=None, log=print, progress=None) -> RunResult:
         ratio = wm_error[f"{kind}_model"] / np.maximum(wm_error[f"{kind}_copy"], 1e-12)
         for d, name in enumerate(OBS_NAMES):
             metrics[f"wm_{kind}_ratio_{name}"] = float(ratio[d])
-    metrics = {k: _round(v) for k, v in metrics.items()}
-    history = {**{f"wm_{k}": v for k, v in wm_hist.items()}, **imag_hist}
-    return RunResult(cfg, metrics, history, wm_error, rollouts, wm, agent, init_agent, data, timing)
+    return {k: _round(v) for k, v in metrics.items()}
 
 
 def platform_fingerprint() -> dict:

@@ -68,13 +68,16 @@ def imagine(wm, agent, h, z, horizon: int):
 
 
 def train_in_imagination(wm, agent, starts_obs, starts_act, mean, std, cfg, gen: torch.Generator,
-                         monitor=None, progress=None, log=print):
+                         monitor=None, progress=None, log=print, reward_fn=reward_from_obs,
+                         return_fn=lambda_return):
     """Train ``agent`` purely in dreams of the frozen ``wm``. Returns the training history.
 
     ``starts_obs`` (N, C+1, D) and ``starts_act`` (N, C, A): normalised real frames to warm the
     start states from. ``monitor(agent) -> float``, if given, is called every
     ``cfg.monitor_every`` iterations and at the last one, and should return the policy's mean
     reward per step in the REAL sim: it only watches, no gradient ever comes from it.
+    ``reward_fn(norm_obs, mean, std)`` and ``return_fn(rewards, values, gamma, lam)`` default to
+    this package's; a learner can pass their own and watch it drive the training.
     History: ``imag_reward`` (per-step imagined reward, every iteration), ``critic_loss``,
     ``log_std``, and ``monitor_iters``/``monitor_real_reward``.
     """
@@ -91,7 +94,7 @@ def train_in_imagination(wm, agent, starts_obs, starts_act, mean, std, cfg, gen:
             hist["monitor_real_reward"].append(monitor(agent))
         idx = torch.randint(len(starts_obs), (cfg.imag_batch,), generator=gen)
         states, obs_pred, entropy = imagine(wm, agent, starts_h[idx], starts_z[idx], cfg.imag_horizon)
-        rewards = reward_from_obs(obs_pred, mean, std)[0]                     # (H, B)
+        rewards = reward_fn(obs_pred, mean, std)[0]                     # (H, B)
 
         # Two stop-gradients keep the objectives apart. The critic regresses V(state) on the
         # return, so it sees detached states (it must not steer the actor through them). The
@@ -99,7 +102,7 @@ def train_in_imagination(wm, agent, starts_obs, starts_act, mean, std, cfg, gen:
         # (the actor must not learn by inflating the critic). The actor's gradient therefore
         # arrives only along the imagined-reward path, through the frozen dynamics.
         values = agent.value(states.detach())                                # (H+1, B)
-        returns = lambda_return(rewards, values.detach(), cfg.gamma, cfg.lam)  # (H, B)
+        returns = return_fn(rewards, values.detach(), cfg.gamma, cfg.lam)  # (H, B)
         actor_loss = -(returns.mean() + cfg.ent_coef * entropy)
         critic_loss = 0.5 * F.mse_loss(values[:-1], returns.detach())
         opt.zero_grad()

@@ -97,3 +97,15 @@ def test_real_rollouts_keep_both_worlds_trajectories():
     assert np.isfinite(dream.obs).all()
     # The zero-action control really never moves the pusher's command.
     assert np.all(res.rollouts["dream_zero"].actions == 0)
+
+
+def test_cached_stages_reproduce_a_fresh_run(tmp_path):
+    cfg = make_config(smoke=True, out=tmp_path / "out")
+    fresh = run(cfg, log=None)
+    first = run(cfg, model_cache=tmp_path / "models", log=None)
+    assert sorted(p.name.split("_")[0] for p in (tmp_path / "models").glob("*.pt")) == ["agent", "wm"]
+    again = run(cfg, model_cache=tmp_path / "models", log=None)   # both stages load from disk
+    assert fresh.metrics == first.metrics == again.metrics
+    changed = run(cfg.replace(imag_iters=cfg.imag_iters + 1), model_cache=tmp_path / "models", log=None)
+    assert len(list((tmp_path / "models").glob("agent_*.pt"))) == 2  # a new agent, the same model
+    assert changed.metrics["imag_iters"] == cfg.imag_iters + 1
