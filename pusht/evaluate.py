@@ -61,12 +61,15 @@ def _to_np(x):
     return x.detach().cpu().numpy().astype(np.float64)
 
 
-@torch.inference_mode()
-def dream_rollout(wm, policy, obs0: np.ndarray, horizon: int, mean, std) -> Rollout:
-    """Warm (h, z) on the start frames ``obs0`` (B, 6, metres) and dream ``horizon`` steps."""
-    norm0 = torch.as_tensor((obs0 - _to_np(mean)) / _to_np(std), dtype=torch.float32, device=mean.device)
-    h, _ = wm._init(len(obs0))
-    z = wm.filter_step(h, norm0)
+def dream(wm, policy, norm_obs0: torch.Tensor, horizon: int):
+    """The imagined half of the evaluation, in the model's own (normalised) units.
+
+    Warm the state on the start frames only: ``h = 0``, ``z = posterior(h, encoder(o_0))``. Then,
+    ``horizon`` times: act on ``[h, z]``, step the prior with ``wm.img_step``. Decode every state,
+    the start included. Returns (decoded observations (T+1, B, D), actions (T, B, A)).
+    """
+    h, _ = wm._init(norm_obs0.shape[0])
+    z = wm.filter_step(h, norm_obs0)
     hs, zs, acts = [h], [z], []
     for _ in range(horizon):
         a = policy(torch.cat([h, z], dim=-1))
@@ -74,10 +77,23 @@ def dream_rollout(wm, policy, obs0: np.ndarray, horizon: int, mean, std) -> Roll
         hs.append(h)
         zs.append(z)
         acts.append(a)
-    norm = wm.decode(torch.stack(hs), torch.stack(zs))                     # (T+1, B, D)
+    return wm.decode(torch.stack(hs), torch.stack(zs)), torch.stack(acts)
+
+
+@torch.inference_mode()
+def dream_rollout(wm, policy, obs0: np.ndarray, horizon: int, mean, std, dream_fn=dream) -> Rollout:
+    """Warm (h, z) on the start frames ``obs0`` (B, 6, metres) and dream ``horizon`` steps.
+
+    ``dream_fn`` (default: :func:`dream`) does the dreaming; a learner can pass their own.
+    """
+    norm0 = torch.as_tensor((obs0 - _to_np(mean)) / _to_np(std), dtype=torch.float32, device=mean.device)
+    norm, acts = dream_fn(wm, policy, norm0, horizon)                        # (T+1, B, D), (T, B, A)
+    if tuple(norm.shape) != (horizon + 1, len(obs0), mean.shape[-1]):
+        raise ValueError(f"dream_fn must return decoded observations of shape (horizon+1, B, D) = "
+                         f"{(horizon + 1, len(obs0), mean.shape[-1])}; got {tuple(norm.shape)}")
     r, pos, _ = reward_from_obs(norm[1:], mean, std)
-    return Rollout(obs=_to_np(norm * std + mean), actions=_to_np(torch.stack(acts)),
-                   rewards=_to_np(r), pos_err=_to_np(pos), success=np.zeros(len(obs0), dtype=bool))
+    return Rollout(obs=_to_np(norm * std + mean), actions=_to_np(acts), rewards=_to_np(r),
+                   pos_err=_to_np(pos), success=np.zeros(len(obs0), dtype=bool))
 
 
 @torch.inference_mode()
@@ -121,8 +137,11 @@ def pusher_gap(rollout: Rollout) -> np.ndarray:
 TOUCH_TOL = 0.003   # m: a rim within 3 mm of the T counts as a touch
 
 
-def two_world_eval(wm, agent, init_agent, seeds, horizon: int, mean, std) -> tuple[dict, dict]:
+def two_world_eval(wm, agent, init_agent, seeds, horizon: int, mean, std,
+                   dream_fn=dream) -> tuple[dict, dict]:
     """Evaluate ``agent`` in the dream and in reality on the same starts, plus two control dreams.
+
+    ``dream_fn`` does the dreaming (see :func:`dream`); a learner can pass their own.
 
     Returns ``(metrics, rollouts)``: metrics is a flat dict of floats, rollouts maps
     ``"dream"``, ``"real"``, ``"dream_zero"`` and ``"dream_untrained"`` to ``Rollout``.
@@ -132,10 +151,10 @@ def two_world_eval(wm, agent, init_agent, seeds, horizon: int, mean, std) -> tup
     real = real_rollout(wm, policy_of(agent), seeds, horizon, mean, std)
     obs0 = real.obs[0]
     rollouts = {
-        "dream": dream_rollout(wm, policy_of(agent), obs0, horizon, mean, std),
+        "dream": dream_rollout(wm, policy_of(agent), obs0, horizon, mean, std, dream_fn),
         "real": real,
-        "dream_zero": dream_rollout(wm, zero_policy, obs0, horizon, mean, std),
-        "dream_untrained": dream_rollout(wm, policy_of(init_agent), obs0, horizon, mean, std),
+        "dream_zero": dream_rollout(wm, zero_policy, obs0, horizon, mean, std, dream_fn),
+        "dream_untrained": dream_rollout(wm, policy_of(init_agent), obs0, horizon, mean, std, dream_fn),
     }
     agent.train(was_training)
 
