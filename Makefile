@@ -1,23 +1,30 @@
 # The chapter's commands. Each target sets up what it needs first.
-#   make run    the chapter's pipeline, seed 0, default config -> runs/seed0/metrics.json
-#   make test   the test suite
-#   make bench  speed figures -> benchmarks/wallclock.csv
-#   make meta   re-measure seeds 0-2 and the horizon sweep -> meta.yaml
+#   make chapter  the main job: all five notebooks at the default config -> runs/chapter/
+#   make test     the test suite (runs every notebook in smoke mode, checks the release)
+#   make run      the pipeline alone, seed 0, default config -> runs/seed0/metrics.json
+#   make release  regenerate the student notebooks/ from solutions/ (nbgrader)
+#   make lab      JupyterLab on the student notebooks (instructors: jupyter lab solutions/)
+#   make bench    speed figures -> benchmarks/wallclock.csv
+#   make meta     re-measure seeds 0-2 and the horizon sweep -> meta.yaml
 PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: setup run test bench meta clean
+export PATH := $(abspath $(VENV))/bin:$(PATH)
+
+.PHONY: setup chapter run test bench meta release lab clean
 
 setup: $(STAMP)
 
 $(STAMP): requirements.txt pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -r requirements.txt
 	$(PY) -m pip install --quiet --no-deps -e .
 	touch $(STAMP)
+
+chapter: setup
+	$(PY) scripts/chapter.py --out runs/chapter
 
 run: setup
 	$(PY) -m pusht.dreamer --seed 0 --out runs/seed0
@@ -30,6 +37,12 @@ bench: setup
 
 meta: setup
 	$(PY) scripts/record_meta.py
+
+release: setup
+	$(PY) scripts/release.py
+
+lab: setup
+	$(VENV)/bin/jupyter lab notebooks/
 
 clean:
 	rm -rf runs .pytest_cache

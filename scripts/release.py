@@ -1,0 +1,158 @@
+"""Generate the student release (notebooks/) from the instructor notebooks (solutions/) with nbgrader.
+
+    python scripts/release.py           # regenerate notebooks/ (and refresh the Colab install cells)
+    python scripts/release.py --check   # CI: fail if notebooks/ is stale or leaks a solution
+
+notebooks/ is never edited by hand. The release is nbgrader's `generate_assignment` output plus one
+badge cell at the top (Open in Colab, Binder), with the address taken from course.yaml.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import nbformat
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+SOLUTIONS, RELEASE = ROOT / "solutions", ROOT / "notebooks"
+COURSE = yaml.safe_load((ROOT / "course.yaml").read_text())
+INSTALL_RE = re.compile(r"git\+https://github\.com/[^\"'@\s]+@[^\"'\s]+")
+MARKERS = ("### BEGIN SOLUTION", "### END SOLUTION", "### BEGIN HIDDEN TESTS", "### END HIDDEN TESTS",
+           "BEGIN MARK SCHEME", "END MARK SCHEME")
+
+
+def install_url() -> str:
+    return f"git+https://github.com/{COURSE['repository']}@{COURSE['ref']}"
+
+
+def colab_url(name: str) -> str:
+    return (f"https://colab.research.google.com/github/{COURSE['repository']}/blob/{COURSE['ref']}/"
+            f"notebooks/{name}")
+
+
+def binder_url(name: str) -> str:
+    return f"https://mybinder.org/v2/gh/{COURSE['repository']}/{COURSE['ref']}?labpath=notebooks%2F{name}"
+
+
+def badge_cell(name: str):
+    text = (f"[![Open In Colab](https://colab.research.google.com/assets/colab-badge.svg)]({colab_url(name)}) "
+            f"[![Binder](https://mybinder.org/badge_logo.svg)]({binder_url(name)})")
+    cell = nbformat.v4.new_markdown_cell(text, metadata={"release_badges": True})
+    cell.id = "release-badges"           # fixed, so a regenerated release is byte-identical
+    return cell
+
+
+def refresh_install_cells() -> list[Path]:
+    """Point every solution notebook's Colab install cell at course.yaml's address."""
+    changed = []
+    for path in sorted(SOLUTIONS.glob("*.ipynb")):
+        nb = nbformat.read(path, as_version=4)
+        dirty = False
+        for cell in nb.cells:
+            if cell.cell_type == "code" and "google.colab" in cell.source:
+                new = INSTALL_RE.sub(install_url(), cell.source)
+                dirty |= new != cell.source
+                cell.source = new
+        if dirty:
+            nbformat.write(nb, path)
+            changed.append(path)
+    return changed
+
+
+def tool_env() -> dict:
+    """nbgrader shells out to `alembic`: make this interpreter's scripts folder visible."""
+    return {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}"}
+
+
+def generate() -> dict[str, str]:
+    """Run nbgrader in a scratch course; return {notebook name: release JSON text}."""
+    assignment = COURSE["assignment"]
+    with tempfile.TemporaryDirectory() as tmp:
+        course = Path(tmp)
+        (course / "source" / assignment).mkdir(parents=True)
+        for path in sorted(SOLUTIONS.glob("*.ipynb")):
+            shutil.copy(path, course / "source" / assignment / path.name)
+        shutil.copy(ROOT / "autograde" / "nbgrader_config.py", course / "nbgrader_config.py")
+        proc = subprocess.run([sys.executable, "-m", "nbgrader", "generate_assignment", assignment,
+                               "--force", f"--CourseDirectory.root={course}",
+                               f"--CourseDirectory.db_url=sqlite:///{course / 'gradebook.db'}"],
+                              cwd=course, capture_output=True, text=True, env=tool_env())
+        if proc.returncode != 0:
+            sys.exit(f"nbgrader generate_assignment failed:\n{proc.stdout}\n{proc.stderr}")
+        out = {}
+        for path in sorted((course / "release" / assignment).glob("*.ipynb")):
+            nb = nbformat.read(path, as_version=4)
+            nb.cells.insert(0, badge_cell(path.name))
+            out[path.name] = nbformat.writes(nb) + "\n"
+        return out
+
+
+def leaks(name: str, text: str) -> list[str]:
+    """Solution code, hidden tests or markers of ``name`` that appear in its release text."""
+    found = [m for m in MARKERS if m in text]
+    source = nbformat.read(SOLUTIONS / name, as_version=4)
+    released = "\n".join(c.source for c in nbformat.reads(text, as_version=4).cells)
+    for cell in source.cells:
+        for block in re.findall(r"### BEGIN (?:SOLUTION|HIDDEN TESTS)\n(.*?)### END", cell.source, re.S):
+            for line in block.splitlines():
+                line = line.strip()
+                if len(line) > 12 and not line.startswith("#") and line in released:
+                    found.append(f"solution/hidden line: {line[:60]}")
+    return found
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--check", action="store_true", help="compare with notebooks/ instead of writing")
+    args = p.parse_args(argv)
+    if not args.check:
+        for path in refresh_install_cells():
+            print(f"refreshed the Colab install cell in {path.relative_to(ROOT)}")
+    release = generate()
+    problems = []
+    for name, text in release.items():
+        problems += [f"{name}: leaks {what}" for what in leaks(name, text)]
+    if args.check:
+        committed = {p.name for p in RELEASE.glob("*.ipynb")}
+        for name in sorted(committed - set(release)):
+            problems.append(f"notebooks/{name} has no source in solutions/")
+        for name, text in release.items():
+            path = RELEASE / name
+            if not path.exists():
+                problems.append(f"notebooks/{name} is missing: run `make release`")
+            elif path.read_text() != text:
+                problems.append(f"notebooks/{name} is stale: run `make release`")
+        for path in SOLUTIONS.glob("*.ipynb"):
+            nb = json.loads(path.read_text())
+            if any(c.get("outputs") for c in nb["cells"]):
+                problems.append(f"solutions/{path.name} has outputs committed: clear them")
+            if any(INSTALL_RE.search("".join(c["source"])) and install_url() not in "".join(c["source"])
+                   for c in nb["cells"]):
+                problems.append(f"solutions/{path.name}: Colab install cell differs from course.yaml")
+    if problems:
+        print("\n".join(problems))
+        return 1
+    if not args.check:
+        RELEASE.mkdir(exist_ok=True)
+        for path in RELEASE.glob("*.ipynb"):
+            if path.name not in release:
+                path.unlink()
+        for name, text in release.items():
+            (RELEASE / name).write_text(text)
+        print(f"wrote {len(release)} notebooks to {RELEASE.relative_to(ROOT)}/")
+    else:
+        print(f"notebooks/ is in sync with solutions/ ({len(release)} notebooks, no leaks)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
