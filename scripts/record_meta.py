@@ -61,6 +61,54 @@ def acceptance(m: dict) -> dict:
     }
 
 
+README = ROOT / "README.md"
+RESULTS_START, RESULTS_END = "<!-- results:start", "<!-- results:end -->"
+ROWS = [("imagined_return_per_step", "imagined reward/step (dream)", "+.3f"),
+        ("real_return_per_step", "real reward/step (pymunk)", "+.3f"),
+        ("imagination_gap", "imagination gap", "+.3f"),
+        ("imagined_final_tee_dist", "dream final block-to-target (m)", ".3f"),
+        ("real_final_tee_dist", "real final block-to-target (m)", ".3f"),
+        ("spawn_tee_dist", "block spawn distance (m)", ".3f"),
+        ("real_success_rate", "real success rate", ".2f"),
+        ("real_block_displacement", "real block moved (m, mean)", ".3f"),
+        ("real_episodes_touching_block", "real episodes the pusher touched the block", "d"),
+        ("zero_action_dream_final_tee_dist", "control: zero-action dream, final distance (m)", ".3f"),
+        ("untrained_actor_dream_final_tee_dist", "control: untrained-actor dream, final distance (m)", ".3f"),
+        ("imagined_reward_first20_train", "imagined reward/step, first 20 iterations", "+.3f"),
+        ("imagined_reward_last20_train", "imagined reward/step, last 20 iterations", "+.3f")]
+
+
+def render_results(meta: dict) -> str:
+    """The README's results block, rendered from meta.yaml (never typed)."""
+    seeds = list(meta["seeds"])
+    page = meta["page"]
+    lines = [f"Default config, {meta['seeds'][seeds[0]]['eval_episodes']} held-out starts per seed "
+             f"({meta['platform']['cpu_capability']} CPU, torch {meta['platform']['torch']}):", "",
+             "| measured | " + " | ".join(f"seed {s}" for s in seeds) + " | chapter page, seed 0 |",
+             "| --- |" + " --- |" * (len(seeds) + 1)]
+    for key, title, fmt in ROWS:
+        ref = page.get(key, {})
+        ref = ref.get("seed0", ref.get("about", "")) if isinstance(ref, dict) else ""
+        ref = format(ref, fmt) if isinstance(ref, (int, float)) and not isinstance(ref, bool) else ref
+        lines.append(f"| {title} | " + " | ".join(format(meta["seeds"][s][key], fmt) for s in seeds)
+                     + f" | {ref} |")
+    lines += ["", "Imagination horizon sweep (Exercise 2):", "",
+              "| run | gap | dream final distance (m) | real final distance (m) | real success |",
+              "| --- | --- | --- | --- | --- |"]
+    for run, m in meta["horizon_sweep"].items():
+        lines.append(f"| {run} | {m['imagination_gap']:+.3f} | {m['imagined_final_tee_dist']:.3f} | "
+                     f"{m['real_final_tee_dist']:.3f} | {m['real_success_rate']:.2f} |")
+    return "\n".join(lines)
+
+
+def readme_with_results(meta: dict) -> str:
+    text = README.read_text()
+    head, rest = text.split(RESULTS_START, 1)
+    marker_line, _ = rest.split("\n", 1)
+    _, tail = rest.split(RESULTS_END, 1)
+    return head + RESULTS_START + marker_line + "\n" + render_results(meta) + "\n" + RESULTS_END + tail
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--out", type=Path, default=ROOT / "meta.yaml")
@@ -88,6 +136,9 @@ def main(argv=None):
               "# 'page' holds the chapter page's own figures for comparison.\n")
     args.out.write_text(header + yaml.safe_dump(record, sort_keys=False, width=100))
     print(f"wrote {args.out}")
+    if args.out == ROOT / "meta.yaml":
+        README.write_text(readme_with_results(yaml.safe_load(args.out.read_text())))
+        print(f"updated the results in {README}")
 
 
 if __name__ == "__main__":

@@ -96,16 +96,44 @@ def generate() -> dict[str, str]:
         return out
 
 
+README = ROOT / "README.md"
+TABLE_START, TABLE_END = "<!-- notebooks:start", "<!-- notebooks:end -->"
+
+
+def readme_with_table(names) -> str:
+    """README.md with its notebook table rendered from course.yaml."""
+    rows = ["| notebook | open |", "| --- | --- |"]
+    for name in names:
+        title = name[:-len(".ipynb")].replace("_", " ")
+        rows.append(f"| [{title}](notebooks/{name}) | "
+                    f"[![Open In Colab](https://colab.research.google.com/assets/colab-badge.svg)]({colab_url(name)}) "
+                    f"[![Binder](https://mybinder.org/badge_logo.svg)]({binder_url(name)}) |")
+    text = README.read_text()
+    head, rest = text.split(TABLE_START, 1)
+    marker_line, _ = rest.split("\n", 1)
+    _, tail = rest.split(TABLE_END, 1)
+    return head + TABLE_START + marker_line + "\n" + "\n".join(rows) + "\n" + TABLE_END + tail
+
+
+BLOCK_RE = re.compile(r"### BEGIN (?:SOLUTION|HIDDEN TESTS)\n(.*?)### END (?:SOLUTION|HIDDEN TESTS)", re.S)
+
+
 def leaks(name: str, text: str) -> list[str]:
-    """Solution code, hidden tests or markers of ``name`` that appear in its release text."""
+    """Solution code, hidden tests or markers of ``name`` that appear in its release text.
+
+    A line counts as a leak only if it is inside a solution or hidden-test block of the source
+    and nowhere else in it (a visible test may legitimately share a line with a hidden one).
+    """
     found = [m for m in MARKERS if m in text]
     source = nbformat.read(SOLUTIONS / name, as_version=4)
-    released = "\n".join(c.source for c in nbformat.reads(text, as_version=4).cells)
+    released = {line.strip() for c in nbformat.reads(text, as_version=4).cells
+                for line in c.source.splitlines()}
+    public = {line.strip() for c in source.cells for line in BLOCK_RE.sub("", c.source).splitlines()}
     for cell in source.cells:
-        for block in re.findall(r"### BEGIN (?:SOLUTION|HIDDEN TESTS)\n(.*?)### END", cell.source, re.S):
+        for block in BLOCK_RE.findall(cell.source):
             for line in block.splitlines():
                 line = line.strip()
-                if len(line) > 12 and not line.startswith("#") and line in released:
+                if len(line) > 12 and not line.startswith("#") and line in released - public:
                     found.append(f"solution/hidden line: {line[:60]}")
     return found
 
@@ -131,6 +159,8 @@ def main(argv=None) -> int:
                 problems.append(f"notebooks/{name} is missing: run `make release`")
             elif path.read_text() != text:
                 problems.append(f"notebooks/{name} is stale: run `make release`")
+        if README.read_text() != readme_with_table(sorted(release)):
+            problems.append("README.md's notebook table is stale: run `make release`")
         for path in SOLUTIONS.glob("*.ipynb"):
             nb = json.loads(path.read_text())
             if any(c.get("outputs") for c in nb["cells"]):
@@ -148,6 +178,7 @@ def main(argv=None) -> int:
                 path.unlink()
         for name, text in release.items():
             (RELEASE / name).write_text(text)
+        README.write_text(readme_with_table(sorted(release)))
         print(f"wrote {len(release)} notebooks to {RELEASE.relative_to(ROOT)}/")
     else:
         print(f"notebooks/ is in sync with solutions/ ({len(release)} notebooks, no leaks)")

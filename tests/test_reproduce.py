@@ -16,6 +16,16 @@ ROOT = Path(__file__).resolve().parents[1]
 META = yaml.safe_load((ROOT / "meta.yaml").read_text())
 
 
+def test_readme_results_are_rendered_from_meta():
+    import sys
+
+    sys.path.insert(0, str(ROOT / "scripts"))
+    from record_meta import readme_with_results
+
+    assert (ROOT / "README.md").read_text() == readme_with_results(META), \
+        "README results differ from meta.yaml: run `make meta` (or re-render them)"
+
+
 def test_meta_was_recorded_at_todays_default_config():
     current = {k: v for k, v in make_config().to_dict().items() if k not in ("seed", "out")}
     assert META["config"] == current, "defaults changed: re-run `make meta` to re-measure"
