@@ -15,4 +15,3 @@ c.ClearSolutions.code_stub = {"python": "# YOUR CODE HERE\nraise NotImplementedE
 c.ClearSolutions.text_stub = "YOUR ANSWER HERE"
 c.ClearOutput.enabled = True
 c.Execute.timeout = 120            # seconds per cell; a student's infinite loop cannot hang grading
-c.Execute.allow_errors = True
