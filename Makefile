@@ -3,6 +3,7 @@
 #   make test     the test suite (runs every notebook in smoke mode, checks the release)
 #   make run      the pipeline alone, seed 0, default config -> runs/seed0/metrics.json
 #   make release  regenerate the student notebooks/ from solutions/ (nbgrader)
+#   make grade    grade a class: make grade SUBMISSIONS=lms_download.zip
 #   make lab      JupyterLab on the student notebooks (instructors: jupyter lab solutions/)
 #   make bench    speed figures -> benchmarks/wallclock.csv
 #   make meta     re-measure seeds 0-2 and the horizon sweep -> meta.yaml
@@ -13,7 +14,7 @@ STAMP  := $(VENV)/.installed
 
 export PATH := $(abspath $(VENV))/bin:$(PATH)
 
-.PHONY: setup chapter run test bench meta release lab clean
+.PHONY: setup chapter run test bench meta release grade lab clean
 
 setup: $(STAMP)
 
@@ -40,6 +41,10 @@ meta: setup
 
 release: setup
 	$(PY) scripts/release.py
+
+grade: setup
+	@test -n "$(SUBMISSIONS)" || (echo "usage: make grade SUBMISSIONS=path/to/submissions.zip" && exit 2)
+	$(PY) autograde/grade.py "$(SUBMISSIONS)"
 
 lab: setup
 	$(VENV)/bin/jupyter lab notebooks/

@@ -87,13 +87,18 @@ AGENT_FIELDS = WM_FIELDS + ("imag_iters", "imag_batch", "imag_horizon", "actor_l
                             "ent_coef", "monitor_every", "monitor_episodes", "eval_horizon")
 
 
-def _cache_path(model_cache, kind: str, cfg: Config, names) -> Path | None:
+# ... and which modules: editing one of these invalidates the stage's cache, editing others does not.
+WM_MODULES = ("env.py", "expert.py", "data.py", "world_model.py", "config.py", "dreamer.py")
+AGENT_MODULES = WM_MODULES + ("agent.py", "imagination.py", "reward.py", "evaluate.py")
+
+
+def _cache_path(model_cache, kind: str, cfg: Config, names, modules) -> Path | None:
     if model_cache is None:
         return None
     here = Path(__file__).parent
     h = hashlib.sha256(json.dumps({n: str(getattr(cfg, n)) for n in names}, sort_keys=True).encode())
-    for src in sorted(here.glob("*.py")):          # any code change invalidates every cached stage
-        h.update(src.read_bytes())
+    for name in modules:
+        h.update((here / name).read_bytes())
     return Path(model_cache) / f"{kind}_{h.hexdigest()[:16]}.pt"
 
 
@@ -133,7 +138,7 @@ def world_model_stage(cfg: Config, cache_dir=None, model_cache=None, log=print,
         return WorldModelStage(data, freeze(wm.to(cfg.device)), hist, error, time.perf_counter() - t0,
                                data_seconds)
 
-    return _cached(_cache_path(model_cache, "wm", cfg, WM_FIELDS), build)
+    return _cached(_cache_path(model_cache, "wm", cfg, WM_FIELDS, WM_MODULES), build)
 
 
 def agent_stage(cfg: Config, stage: WorldModelStage, model_cache=None, log=print, progress=None,
@@ -165,7 +170,7 @@ def agent_stage(cfg: Config, stage: WorldModelStage, model_cache=None, log=print
         return AgentStage(agent, init_agent, hist, time.perf_counter() - t0)
 
     custom = reward_fn is not reward_from_obs or return_fn is not lambda_return
-    return _cached(None if custom else _cache_path(model_cache, "agent", cfg, AGENT_FIELDS), build)
+    return _cached(None if custom else _cache_path(model_cache, "agent", cfg, AGENT_FIELDS, AGENT_MODULES), build)
 
 
 def run(cfg: Config, cache_dir=None, model_cache=None, log=print, progress=None) -> RunResult:

@@ -68,6 +68,8 @@ def dream(wm, policy, norm_obs0: torch.Tensor, horizon: int):
     ``horizon`` times: act on ``[h, z]``, step the prior with ``wm.img_step``. Decode every state,
     the start included. Returns (decoded observations (T+1, B, D), actions (T, B, A)).
     """
+    if horizon < 1:
+        raise ValueError(f"horizon must be at least 1 step, got {horizon}")
     h, _ = wm._init(norm_obs0.shape[0])
     z = wm.filter_step(h, norm_obs0)
     hs, zs, acts = [h], [z], []

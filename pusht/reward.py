@@ -20,8 +20,9 @@ def reward_from_obs(norm_obs: torch.Tensor, mean: torch.Tensor, std: torch.Tenso
     De-normalise (``obs = norm_obs * std + mean``), then read the T's centre ``obs[..., 2:4]`` and
     yaw ``atan2(sin, cos)`` from ``obs[..., 4:6]``; the target is the origin with yaw 0.
 
-    Returns ``(reward, pos_err, ang_err)``, each of the leading shape: reward per step in
-    [-1, 0], position error in metres, |yaw error| in radians. Differentiable in ``norm_obs``.
+    Returns ``(reward, pos_err, ang_err)``, each of the leading shape: reward per step (0 on the
+    target; -1 for a block 0.5 m away and upside down), position error in metres, |yaw error| in
+    radians. Differentiable in ``norm_obs``.
     """
     obs = norm_obs * std + mean
     pos_err = torch.linalg.vector_norm(obs[..., 2:4], dim=-1)

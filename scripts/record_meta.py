@@ -23,20 +23,8 @@ sys.path.insert(0, str(ROOT))
 
 from pusht.config import make_config  # noqa: E402
 from pusht.dreamer import platform_fingerprint, run  # noqa: E402
+from pusht.page import PAGE  # noqa: E402
 
-# The chapter page's figures (seed 0 unless a range is given), for comparison only.
-PAGE = {
-    "imagined_return_per_step": {"seed0": -0.144, "seeds0_2": [-0.22, -0.144]},
-    "real_return_per_step": {"seed0": -0.384, "seeds0_2": [-0.392, -0.383]},
-    "imagination_gap": {"seed0": 0.240, "seeds0_2": [0.17, 0.24]},
-    "imagined_final_tee_dist": {"seed0": 0.011},
-    "real_final_tee_dist": {"seed0": 0.160},
-    "spawn_tee_dist": {"about": 0.17},
-    "real_success_rate": {"seed0": 0.0, "seeds0_2": [0.0, 0.0]},
-    "final_imagined_reward_per_step_train": {"seed0": -0.244},
-    "horizon_sweep_5_vs_30": "dream tee-dist ~0.01-0.02 m at both, real ~0.16 m, success 0.00 at both",
-    "wall_clock_one_seed_s": 13,
-}
 HEADLINE = ["imagined_return_per_step", "real_return_per_step", "imagination_gap",
             "imagined_final_tee_dist", "real_final_tee_dist", "spawn_tee_dist", "real_success_rate",
             "real_block_displacement", "real_episodes_touching_block",

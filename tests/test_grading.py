@@ -1,0 +1,143 @@
+"""Grading a class: every kind of bad submission gets the score and feedback it deserves, nothing
+stops the batch, and grading again gives the same grades.
+
+This is the instructor's one command (autograde/grade.py) on a synthetic class
+(autograde/synthetic_class.py), with real nbgrader and its sqlite gradebook.
+"""
+
+import csv
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "autograde"))
+
+import grade  # noqa: E402
+from manual_grade import set_manual_grade  # noqa: E402
+from synthetic_class import write_zip  # noqa: E402
+
+STUDENTS = ["badpred", "colab", "garbage", "loops", "order", "perfect", "raises", "tamper", "wrong"]
+TIMEOUT = 30   # seconds per cell: enough for every smoke-mode cell, short for the infinite loop
+
+
+@pytest.fixture(scope="module")
+def graded(executed_notebooks, tmp_path_factory):
+    executed, errors = executed_notebooks
+    if any(errors.values()):
+        pytest.skip("a notebook fails on its own; see test_notebooks")
+    tmp = tmp_path_factory.mktemp("grading")
+    course = tmp / "course"
+    course.mkdir()
+    subs = write_zip(tmp / "class.zip", executed)
+    t = time.perf_counter()
+    report = grade.grade_class(subs, course, timeout=TIMEOUT, log=print)
+    seconds = time.perf_counter() - t
+    print(f"graded {len(report)} synthetic students in {seconds:.0f} s")
+    return course, report, subs
+
+
+def cell_scores(course, student, notebook):
+    from nbgrader.api import Gradebook, MissingEntry
+
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=grade.COURSE_ID) as gb:
+        try:
+            sub = gb.find_submission_notebook(notebook, grade.ASSIGNMENT, student)
+        except MissingEntry:
+            return None
+        return {g.name: g.score for g in sub.grades}
+
+
+def grades_csv(course):
+    with open(course / "grades.csv", newline="") as f:
+        return {row["student_id"]: float(row["raw_score"]) for row in csv.DictReader(f)}
+
+
+def test_every_student_is_in_the_gradebook_and_the_csv(graded):
+    course, report, _ = graded
+    assert sorted(report) == STUDENTS
+    assert sorted(grades_csv(course)) == STUDENTS
+
+
+def test_perfect_student_gets_every_automatic_point(graded):
+    course, _, _ = graded
+    for nb in ("02_reward", "03_imagination_actor", "04_imagination_gap"):
+        scores = cell_scores(course, "perfect", nb)
+        tests = {k: v for k, v in scores.items() if k.endswith("_tests")}
+        assert tests and all(v > 0 for v in tests.values()), (nb, scores)
+    assert cell_scores(course, "perfect", "04_imagination_gap")["ex1_order"] == 1
+    assert cell_scores(course, "perfect", "05_horizon")["ex2_order"] == 1
+
+
+def test_experiment_before_prediction_loses_the_completion_point_only(graded):
+    course, report, _ = graded
+    scores = cell_scores(course, "order", "04_imagination_gap")
+    assert scores["ex1_order"] == 0 and scores["dream_impl_tests"] > 0
+    ok, why = report["order"]["completion"]["ex1"]
+    assert not ok and "before the prediction was locked" in why
+
+
+def test_invalid_prediction_loses_the_completion_point_only(graded):
+    course, report, _ = graded
+    scores = cell_scores(course, "badpred", "04_imagination_gap")
+    assert scores["ex1_order"] == 0 and scores["dream_impl_tests"] > 0
+    assert not report["badpred"]["completion"]["ex1"][0]
+
+
+def test_wrong_implementation_fails_its_tests_with_feedback(graded):
+    course, _, _ = graded
+    assert cell_scores(course, "wrong", "02_reward")["reward_impl_tests"] == 0
+    feedback = (course / "feedback" / "wrong" / grade.ASSIGNMENT / "02_reward.html").read_text()
+    assert "AssertionError" in feedback
+
+
+def test_a_notebook_that_raises_is_graded_not_fatal(graded):
+    course, _, _ = graded
+    assert cell_scores(course, "raises", "03_imagination_actor")["lambda_return_impl_tests"] == 0
+
+
+def test_an_infinite_loop_is_interrupted_by_the_cell_timeout(graded):
+    course, _, _ = graded
+    assert cell_scores(course, "loops", "02_reward")["reward_impl_tests"] == 0
+
+
+def test_edited_or_deleted_locked_tests_are_restored(graded):
+    course, report, _ = graded
+    assert cell_scores(course, "tamper", "03_imagination_actor")["lambda_return_impl_tests"] == 4
+    assert cell_scores(course, "tamper", "02_reward")["reward_impl_tests"] == 4
+    assert any("reward_impl_tests' was missing and was put back" in n for n in report["tamper"]["notes"])
+
+
+def test_a_file_that_is_not_a_notebook_scores_zero_with_a_note(graded):
+    course, report, _ = graded
+    assert cell_scores(course, "garbage", "04_imagination_gap") is None
+    assert grades_csv(course)["garbage"] == 0
+    assert any("not a valid notebook" in n for n in report["garbage"]["notes"])
+    assert "not a valid notebook" in (course / "report.csv").read_text()
+
+
+def test_a_colab_download_grades_like_any_other(graded):
+    course, report, _ = graded
+    assert cell_scores(course, "colab", "02_reward")["reward_impl_tests"] == 4
+    assert any("Colab" in n for n in report["colab"]["notes"])
+
+
+def test_mark_scheme_reaches_students_through_feedback_only(graded):
+    course, _, _ = graded
+    feedback = (course / "feedback" / "perfect" / grade.ASSIGNMENT / "04_imagination_gap.html").read_text()
+    assert "Mark scheme" in feedback
+    release = "".join(p.read_text() for p in (ROOT / "notebooks").glob("*.ipynb"))
+    assert "Mark scheme" not in release and "pleasing the dream" not in release
+
+
+def test_regrading_gives_the_same_grades_and_keeps_manual_grades(graded):
+    course, _, subs = graded
+    set_manual_grade("perfect", "04_imagination_gap", "ex1_sentence", 1.0, "Clear and complete.",
+                     course=course)
+    before = grades_csv(course)
+    grade.grade_class(subs, course, timeout=TIMEOUT, log=print)
+    after = grades_csv(course)
+    assert after == before
+    assert cell_scores(course, "perfect", "04_imagination_gap")["ex1_sentence"] == 1.0
