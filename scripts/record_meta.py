@@ -14,8 +14,6 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-import torch
 import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -83,8 +81,8 @@ def render_results(meta: dict) -> str:
     lines += ["", "Imagination horizon sweep (Exercise 2):", "",
               "| run | gap | dream final distance (m) | real final distance (m) | real success |",
               "| --- | --- | --- | --- | --- |"]
-    for run, m in meta["horizon_sweep"].items():
-        lines.append(f"| {run} | {m['imagination_gap']:+.3f} | {m['imagined_final_tee_dist']:.3f} | "
+    for name, m in meta["horizon_sweep"].items():
+        lines.append(f"| {name} | {m['imagination_gap']:+.3f} | {m['imagined_final_tee_dist']:.3f} | "
                      f"{m['real_final_tee_dist']:.3f} | {m['real_success_rate']:.2f} |")
     return "\n".join(lines)
 
