@@ -17,7 +17,7 @@ class Config:
     seed: int = 0
     """Master seed: data collection, model init, imagination sampling and evaluation starts."""
     out: Path = Path("runs/seed0")
-    """Folder for metrics.json, history.npz and timing.json."""
+    """Folder for metrics.json, history.npz and timing.json (the CLI defaults to runs/seed<seed>)."""
     smoke: bool = False
     """Tiny config that runs in a few seconds (for CI and quick checks); see SMOKE below."""
     device: str = "cpu"

@@ -298,6 +298,8 @@ def parse_config(argv=None):
     args = parser.parse_args(argv)
     given = {f.name: getattr(args, f.name) for f in fields(Config)
              if f.name != "smoke" and getattr(args, f.name) is not None}
+    if "out" not in given and "seed" in given:
+        given["out"] = Path(f"runs/seed{given['seed']}")      # each seed gets its own folder
     try:
         cfg = make_config(smoke=args.smoke, **given)
     except ValueError as e:
