@@ -8,7 +8,7 @@ the page leaves open, and the comment says why we chose the value.
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from pathlib import Path
 
 
@@ -137,5 +137,3 @@ def field_docs() -> dict[str, str]:
             docs[node.target.id] = " ".join(str(nxt.value.value).split())
     return docs
 
-
-CONFIG_FIELDS = [f.name for f in fields(Config)]

@@ -18,6 +18,7 @@ import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "scripts"))
 
 from pusht.config import make_config  # noqa: E402
 from pusht.dreamer import platform_fingerprint, run  # noqa: E402
@@ -88,11 +89,9 @@ def render_results(meta: dict) -> str:
 
 
 def readme_with_results(meta: dict) -> str:
-    text = README.read_text()
-    head, rest = text.split(RESULTS_START, 1)
-    marker_line, _ = rest.split("\n", 1)
-    _, tail = rest.split(RESULTS_END, 1)
-    return head + RESULTS_START + marker_line + "\n" + render_results(meta) + "\n" + RESULTS_END + tail
+    from release import splice_readme
+
+    return splice_readme(RESULTS_START, RESULTS_END, render_results(meta))
 
 
 def main(argv=None):

@@ -11,10 +11,8 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import re
 import shutil
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -23,6 +21,8 @@ import nbformat
 import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "autograde"))
+from grade import nbgrader  # noqa: E402  (one way to run nbgrader, shared with the grader)
 SOLUTIONS, RELEASE = ROOT / "solutions", ROOT / "notebooks"
 COURSE = yaml.safe_load((ROOT / "course.yaml").read_text())
 INSTALL_RE = re.compile(r"git\+https://github\.com/[^\"'@\s]+@[^\"'\s]+")
@@ -68,11 +68,6 @@ def refresh_install_cells() -> list[Path]:
     return changed
 
 
-def tool_env() -> dict:
-    """nbgrader shells out to `alembic`: make this interpreter's scripts folder visible."""
-    return {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}"}
-
-
 def generate() -> dict[str, str]:
     """Run nbgrader in a scratch course; return {notebook name: release JSON text}."""
     assignment = COURSE["assignment"]
@@ -82,10 +77,7 @@ def generate() -> dict[str, str]:
         for path in sorted(SOLUTIONS.glob("*.ipynb")):
             shutil.copy(path, course / "source" / assignment / path.name)
         shutil.copy(ROOT / "autograde" / "nbgrader_config.py", course / "nbgrader_config.py")
-        proc = subprocess.run([sys.executable, "-m", "nbgrader", "generate_assignment", assignment,
-                               "--force", f"--CourseDirectory.root={course}",
-                               f"--CourseDirectory.db_url=sqlite:///{course / 'gradebook.db'}"],
-                              cwd=course, capture_output=True, text=True, env=tool_env())
+        proc = nbgrader(course, "generate_assignment", assignment, "--force")
         if proc.returncode != 0:
             sys.exit(f"nbgrader generate_assignment failed:\n{proc.stdout}\n{proc.stderr}")
         out = {}
@@ -108,11 +100,15 @@ def readme_with_table(names) -> str:
         rows.append(f"| [{title}](notebooks/{name}) | "
                     f"[![Open In Colab](https://colab.research.google.com/assets/colab-badge.svg)]({colab_url(name)}) "
                     f"[![Binder](https://mybinder.org/badge_logo.svg)]({binder_url(name)}) |")
-    text = README.read_text()
-    head, rest = text.split(TABLE_START, 1)
+    return splice_readme(TABLE_START, TABLE_END, "\n".join(rows))
+
+
+def splice_readme(start: str, end: str, body: str) -> str:
+    """README.md with the generated block between the ``start`` marker line and ``end`` replaced."""
+    head, rest = README.read_text().split(start, 1)
     marker_line, _ = rest.split("\n", 1)
-    _, tail = rest.split(TABLE_END, 1)
-    return head + TABLE_START + marker_line + "\n" + "\n".join(rows) + "\n" + TABLE_END + tail
+    _, tail = rest.split(end, 1)
+    return head + start + marker_line + "\n" + body + "\n" + end + tail
 
 
 BLOCK_RE = re.compile(r"### BEGIN (?:SOLUTION|HIDDEN TESTS)\n(.*?)### END (?:SOLUTION|HIDDEN TESTS)", re.S)
