@@ -13,7 +13,9 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import copy
+import gc
 import hashlib
 import json
 import os
@@ -114,6 +116,26 @@ def _cached(path, build):
     return stage
 
 
+@contextlib.contextmanager
+def gc_paused():
+    """Pause Python's cyclic garbage collector for the length of a training loop.
+
+    Every tensor an operation returns is a Python object, so a loop of thousands of small
+    operations keeps triggering the collector, and each full pass re-walks every live object
+    (importing torch alone leaves about 170,000). Measured with ``gc.callbacks`` at the default
+    config, that cost 0.4 s of a run. The loops create no reference cycles (autograd graphs are
+    freed by reference counting), so nothing piles up while it is paused; it is switched back on
+    afterwards. It changes no number: garbage collection never touches a float.
+    """
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
+
+
 def world_model_stage(cfg: Config, cache_dir=None, model_cache=None, log=print,
                       progress=None) -> WorldModelStage:
     """Step 1: collect expert data, train 3.1's world model, measure it against copy-last, freeze.
@@ -130,8 +152,9 @@ def world_model_stage(cfg: Config, cache_dir=None, model_cache=None, log=print,
         torch.manual_seed(cfg.seed)        # model init reproducible, independent of data collection
         gen = torch.Generator().manual_seed(cfg.seed)
         wm = WorldModel(OBS_DIM, ACT_DIM, cfg.latent_dim, cfg.hidden_dim, cfg.embed_dim).to(cfg.device)
-        hist = train_world_model(wm, T["train_obs"], T["train_act"], cfg, gen,
-                                 progress=_wrap(progress, "world model"), log=log)
+        with gc_paused():
+            hist = train_world_model(wm, T["train_obs"], T["train_act"], cfg, gen,
+                                     progress=_wrap(progress, "world model"), log=log)
         wm.eval()
         error = prediction_error_vs_copy_last(wm.cpu(), T["val_obs"].cpu(), T["val_act"].cpu(),
                                               T["std"].cpu(), cfg.context)
@@ -163,10 +186,11 @@ def agent_stage(cfg: Config, stage: WorldModelStage, model_cache=None, log=print
             roll = real_rollout(stage.wm, policy_of(a), monitor_seeds, cfg.eval_horizon, mean, std)
             return float(roll.return_per_step.mean())
 
-        hist = train_in_imagination(stage.wm, agent, T["train_obs"][:, : cfg.context + 1],
-                                    T["train_act"][:, : cfg.context], mean, std, cfg, gen,
-                                    monitor=monitor, progress=_wrap(progress, "imagination"),
-                                    log=log, reward_fn=reward_fn, return_fn=return_fn)
+        with gc_paused():
+            hist = train_in_imagination(stage.wm, agent, T["train_obs"][:, : cfg.context + 1],
+                                        T["train_act"][:, : cfg.context], mean, std, cfg, gen,
+                                        monitor=monitor, progress=_wrap(progress, "imagination"),
+                                        log=log, reward_fn=reward_fn, return_fn=return_fn)
         return AgentStage(agent, init_agent, hist, time.perf_counter() - t0)
 
     custom = reward_fn is not reward_from_obs or return_fn is not lambda_return
@@ -327,4 +351,8 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    code = main()
+    # The process ends here. Freezing every live object first spares the interpreter's last
+    # garbage collection at shutdown from re-walking all of torch (measured: 0.55 s -> 0.13 s).
+    gc.freeze()
+    sys.exit(code)
