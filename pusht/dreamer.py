@@ -33,6 +33,7 @@ from .data import EVAL_SEED_BASE, MONITOR_SEED_BASE, load_expert_data, start_see
 from .env import ACT_DIM, OBS_DIM, OBS_NAMES
 from .evaluate import policy_of, real_rollout, two_world_eval
 from .imagination import freeze, lambda_return, train_in_imagination
+from .record import RERUN_MISSING, record_rerun, rerun_available
 from .reward import reward_from_obs
 from .world_model import WorldModel, prediction_error_vs_copy_last, train_world_model
 
@@ -314,6 +315,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="folder for cached expert data (default: $PUSHT_CACHE or ~/.cache/pusht-dreamer)")
     p.add_argument("--no-cache", action="store_true", help="always collect expert data afresh")
     p.add_argument("--quiet", action="store_true", help="print only the final report")
+    p.add_argument("--rerun", action="store_true",
+                   help="also write <out>/dreamer.rrd, a Rerun recording of both worlds and the training "
+                        "curves (needs the optional rerun-sdk package)")
     return p
 
 
@@ -328,6 +332,8 @@ def parse_config(argv=None):
         cfg = make_config(smoke=args.smoke, **given)
     except ValueError as e:
         parser.error(str(e).splitlines()[0])
+    if args.rerun and not rerun_available():     # say so now, not after the whole run
+        parser.error(RERUN_MISSING)
     try:
         torch.empty(0, device=cfg.device)       # fail here, with usage, if the device is unusable
     except Exception as e:                      # torch raises RuntimeError or AssertionError here
@@ -347,6 +353,9 @@ def main(argv=None) -> int:
     print(f"\nmetrics: {cfg.out / 'metrics.json'}  (imagination gap "
           f"{result.metrics['imagination_gap']:+.4f} return/step; real success "
           f"{result.metrics['real_success_rate']:.2f}; {result.timing['total_s']:.1f} s)")
+    if args.rerun:
+        path = record_rerun(result, cfg.out / "dreamer.rrd")
+        print(f"rerun recording: {path}  (open it with: rerun {path})")
     return 0
 
 
