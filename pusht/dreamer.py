@@ -300,8 +300,9 @@ def report(m: dict, log=print) -> None:
 # --- command line ------------------------------------------------------------------------------
 def build_parser() -> argparse.ArgumentParser:
     docs = field_docs()
-    p = argparse.ArgumentParser(prog="python -m pusht.dreamer", description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    # Each config flag's help states its real default; argparse's own would print "None", the
+    # marker for "not given" that lets --smoke fill in only what the user left alone.
+    p = argparse.ArgumentParser(prog="python -m pusht.dreamer", description=__doc__.split("\n\n")[0])
     defaults = Config()
     for f in fields(Config):
         default = getattr(defaults, f.name)

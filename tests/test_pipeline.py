@@ -67,6 +67,19 @@ def test_bad_arguments_exit_with_usage_not_a_traceback(args, message, tmp_path):
     assert "Traceback" not in proc.stderr
 
 
+def test_help_lists_the_chapter_flags_with_their_real_defaults():
+    proc = cli("--help")
+    assert proc.returncode == 0
+    help_text = " ".join(proc.stdout.split())                      # undo argparse's line wrapping
+    for flag in ("--seed", "--out", "--smoke", "--imag_horizon", "--imag_iters", "--imag_batch",
+                 "--actor_lr", "--gamma", "--lam", "--ent_coef", "--wm_epochs", "--wm_lr",
+                 "--batch_size", "--context", "--latent_dim", "--hidden_dim", "--embed_dim",
+                 "--eval_episodes", "--eval_horizon", "--device", "--rerun"):
+        assert f"{flag} " in help_text, flag
+    assert "(default: 400)" in help_text and "(default: 0.0001)" in help_text
+    assert "(default: None)" not in help_text                      # "not given" is not a default
+
+
 def test_training_and_evaluation_starts_never_overlap():
     train = set(start_seeds(TRAIN_SEED_BASE, 0, 300)) | set(start_seeds(VAL_SEED_BASE, 0, 60))
     for run_seed in range(3):
