@@ -8,10 +8,16 @@
 * pipeline warm: the same with the expert data already cached on disk;
 * the per-phase split (from the run's timing.json) and the peak memory (max RSS) of the process;
 * start-up: a process that only imports the package (Python, torch, pymunk) and exits, the floor
-  under every process-wall figure above.
+  under every process-wall figure above;
+* two yardsticks of the host itself, so figures from different machines can be told apart from
+  changes in the code: single-thread matrix-multiply throughput (``host_sgemm_gflops``) and the
+  cost of one small ``nn.Linear`` call (``host_small_linear_us``), the per-operation overhead that
+  bounds this chapter's tiny models.
 
 Speed is measured here, never asserted in a test: this machine has 2 cores and is noisy, so each
-figure is the median of ``--repeats`` runs.
+figure is the median of ``--repeats`` runs. Each run APPENDS its rows to the CSV with the time, the
+host (CPU model and family) and the git commit, so the file keeps the history: the same code can
+be twice as fast on a newer CPU, and the yardsticks show when that is what happened.
 """
 
 from __future__ import annotations
@@ -71,6 +77,80 @@ def startup_seconds() -> float:
     return time.perf_counter() - t
 
 
+def host_yardsticks(repeats: int) -> tuple[float, float]:
+    """(single-thread sgemm GFLOP/s on 1024x1024 matrices, microseconds per Linear(80->64) call on a
+    batch of 64): the host's arithmetic speed and its per-operation overhead."""
+    import torch
+
+    torch.set_num_threads(1)
+    a, b = torch.randn(1024, 1024), torch.randn(1024, 1024)
+    layer, x = torch.nn.Linear(80, 64), torch.randn(64, 80)
+    gflops, us = [], []
+    with torch.no_grad():
+        for _ in range(repeats):
+            a @ b
+            t = time.perf_counter()
+            for _ in range(20):
+                a @ b
+            gflops.append(20 * 2 * 1024 ** 3 / (time.perf_counter() - t) / 1e9)
+            for _ in range(500):
+                layer(x)
+            t = time.perf_counter()
+            for _ in range(5000):
+                layer(x)
+            us.append((time.perf_counter() - t) / 5000 * 1e6)
+    return float(np.median(gflops)), float(np.median(us))
+
+
+def host_description() -> str:
+    """CPU model and family (from /proc/cpuinfo where there is one), cores, torch build."""
+    import torch
+
+    info = {}
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            key, _, value = line.partition(":")
+            info.setdefault(key.strip(), value.strip())
+    except OSError:
+        pass
+    cpu = info.get("model name") or platform.processor() or "unknown CPU"
+    if "cpu family" in info:
+        cpu += f" (family {info['cpu family']} model {info.get('model', '?')})"
+    return (f"{platform.machine()} {cpu}, {os.cpu_count()} cores, torch {torch.__version__} "
+            f"({torch.backends.cpu.get_cpu_capability()})")
+
+
+def git_commit() -> str:
+    """Short commit of the code measured, with '+dirty' if tracked files other than the CSV differ
+    from it."""
+    try:
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
+                              text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", ".",
+                                ":!benchmarks/wallclock.csv"], cwd=ROOT, capture_output=True,
+                               text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return head + ("+dirty" if dirty else "")
+
+
+HEADER = ["measured_at", "tier", "machine", "figure", "value", "unit", "notes", "commit"]
+
+
+def append_rows(path: Path, rows: list[list]) -> None:
+    """Append ``rows`` under HEADER; rows of an older file without the commit column get ''."""
+    old = []
+    if path.exists():
+        with open(path, newline="") as f:
+            old = list(csv.reader(f))
+        if old and old[0] != HEADER:
+            if old[0] != HEADER[:-1]:
+                raise SystemExit(f"{path} has unexpected columns {old[0]}; move it aside and re-run")
+            old = [HEADER] + [r + [""] for r in old[1:]]
+    with open(path, "w", newline="") as f:
+        csv.writer(f).writerows((old or [HEADER]) + rows)
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--repeats", type=int, default=3)
@@ -78,6 +158,10 @@ def main(argv=None):
     args = p.parse_args(argv)
 
     rows = []
+    gflops, op_us = host_yardsticks(args.repeats)
+    rows.append(("host_sgemm_gflops", gflops, "GFLOP/s", "1024x1024 float32 matmul, one thread"))
+    rows.append(("host_small_linear_us", op_us, "us", "one nn.Linear(80, 64) call on a batch of 64"))
+    print(f"host: {gflops:.0f} GFLOP/s sgemm (one thread), {op_us:.1f} us per small Linear call")
     sps = float(np.median([env_steps_per_second() for _ in range(args.repeats)]))
     rows.append(("env_steps_per_s", sps, "steps/s", "random actions, 10 substeps each"))
     print(f"env: {sps:,.0f} steps/s")
@@ -105,17 +189,13 @@ def main(argv=None):
             rows.append((f"pipeline_{name}_{k[:-2]}", med[k], "s", "in-script phase"))
         rows.append((f"pipeline_{name}_peak_rss", med["peak_mb"], "MB", "max resident set size"))
 
-    import torch
     stamp = datetime.now(timezone.utc).isoformat(timespec="seconds")
-    machine = f"{platform.machine()} {os.cpu_count()} cores, torch {torch.__version__} " \
-              f"({torch.backends.cpu.get_cpu_capability()})"
-    with open(args.csv, "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["measured_at", "tier", "machine", "figure", "value", "unit", "notes"])
-        for name, value, unit, note in rows:
-            w.writerow([stamp, "cpu", machine, name, f"{value:.3f}", unit,
-                        f"{note}; {'fastest' if name.endswith('fastest') else 'median'} of {args.repeats}"])
-    print(f"wrote {args.csv}")
+    machine, commit = host_description(), git_commit()
+    kind = {True: "fastest", False: "median"}
+    append_rows(args.csv, [[stamp, "cpu", machine, name, f"{value:.3f}", unit,
+                            f"{note}; {kind[name.endswith('fastest')]} of {args.repeats}", commit]
+                           for name, value, unit, note in rows])
+    print(f"appended {len(rows)} rows to {args.csv} ({machine}; commit {commit})")
 
 
 if __name__ == "__main__":

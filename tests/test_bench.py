@@ -1,0 +1,58 @@
+"""The benchmark keeps a history: each run appends, older rows are never lost or rewritten."""
+
+import csv
+import importlib.util
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _bench():
+    spec = importlib.util.spec_from_file_location("bench", ROOT / "benchmarks" / "bench.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _read(path):
+    with open(path, newline="") as f:
+        return list(csv.reader(f))
+
+
+def test_rows_are_appended_and_an_old_file_gains_an_empty_commit_column(tmp_path):
+    bench = _bench()
+    path = tmp_path / "wallclock.csv"
+    old_row = ["2026-11-22T05:28:59+00:00", "cpu", "old host", "startup", "1.523", "s", "median of 5"]
+    with open(path, "w", newline="") as f:
+        csv.writer(f).writerows([bench.HEADER[:-1], old_row])
+
+    new_row = ["2026-12-01T00:00:00+00:00", "cpu", "new host", "startup", "0.830", "s", "median of 5",
+               "abc1234"]
+    bench.append_rows(path, [new_row])
+    bench.append_rows(path, [new_row])
+
+    rows = _read(path)
+    assert rows[0] == bench.HEADER
+    assert rows[1] == old_row + [""]
+    assert rows[2:] == [new_row, new_row]
+
+
+def test_a_csv_with_foreign_columns_is_refused_not_overwritten(tmp_path):
+    bench = _bench()
+    path = tmp_path / "wallclock.csv"
+    path.write_text("a,b\n1,2\n")
+    try:
+        bench.append_rows(path, [["x"] * len(bench.HEADER)])
+    except SystemExit as e:
+        assert "unexpected columns" in str(e)
+    else:
+        raise AssertionError("append_rows overwrote a CSV it does not understand")
+    assert path.read_text() == "a,b\n1,2\n"
+
+
+def test_host_description_names_the_cpu_family_where_linux_tells_it():
+    desc = _bench().host_description()
+    assert "torch" in desc
+    cpuinfo = Path("/proc/cpuinfo")
+    if cpuinfo.exists() and "cpu family" in cpuinfo.read_text():
+        assert "family" in desc
