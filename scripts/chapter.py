@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -37,6 +39,27 @@ def headline_table(metrics_dir: Path) -> str:
     return "\n".join(lines)
 
 
+def execute(nb: Path, out: Path, smoke: bool) -> None:
+    """Run one instructor notebook headless into ``out`` with papermill, parameters SMOKE and OUT.
+
+    Raises ``papermill.PapermillExecutionError`` naming the failing cell. On Linux and macOS the
+    kernel talks to papermill over Unix sockets in a private temporary folder instead of TCP ports
+    on localhost: nothing here needs the network, and ipykernel would otherwise print a warning
+    about unencrypted TCP at every kernel start.
+    """
+    import papermill as pm
+    from traitlets.config import Config
+
+    with tempfile.TemporaryDirectory(prefix="pusht-kernel-") as sockets:
+        config = Config()
+        if os.name == "posix":
+            config.KernelManager.transport = "ipc"
+            config.KernelManager.ip = os.path.join(sockets, "k")
+        pm.execute_notebook(str(nb), str(out / nb.name), kernel_name="python3", cwd=str(out),
+                            parameters={"SMOKE": smoke, "OUT": str(out)}, progress_bar=False,
+                            config=config)
+
+
 def main(argv=None) -> int:
     import papermill as pm
 
@@ -51,8 +74,7 @@ def main(argv=None) -> int:
         t = time.perf_counter()
         print(f"running {nb.name} ...", flush=True)
         try:
-            pm.execute_notebook(str(nb), str(out / nb.name), kernel_name="python3", cwd=str(out),
-                                parameters={"SMOKE": args.smoke, "OUT": str(out)}, progress_bar=False)
+            execute(nb, out, args.smoke)
         except pm.PapermillExecutionError as e:
             print(f"FAILED: {nb.name}, cell {e.cell_index}: {e.ename}: {e.evalue}\n"
                   f"the executed notebook with the error is {out / nb.name}", file=sys.stderr)

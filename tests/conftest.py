@@ -1,10 +1,12 @@
 """Shared, expensive fixtures: each chapter notebook is executed once per test session."""
 
+import sys
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "scripts"))
 NOTEBOOKS = sorted((ROOT / "solutions").glob("*.ipynb"))
 
 
@@ -13,13 +15,13 @@ def executed_notebooks(tmp_path_factory):
     """Run every instructor notebook headless in smoke mode, in order, sharing one OUT folder as
     `make chapter` does. Returns (folder of executed notebooks, {name: error message or None})."""
     import papermill as pm
+    from chapter import execute
 
     out = tmp_path_factory.mktemp("executed")
     errors = {}
     for path in NOTEBOOKS:
         try:
-            pm.execute_notebook(str(path), str(out / path.name), kernel_name="python3", cwd=str(out),
-                                parameters={"SMOKE": True, "OUT": str(out)}, progress_bar=False)
+            execute(path, out, smoke=True)
             errors[path.name] = None
         except pm.PapermillExecutionError as e:
             errors[path.name] = (f"{path.name}: cell {e.cell_index} (execution count {e.exec_count}) "
