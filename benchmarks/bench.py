@@ -103,10 +103,11 @@ def host_yardsticks(repeats: int) -> tuple[float, float]:
 
 
 def host_description() -> str:
-    """CPU model and family (from /proc/cpuinfo where there is one), cores, torch build."""
-    import torch
+    """The run's platform fingerprint (as meta.yaml records it) plus the CPU model and family, from
+    /proc/cpuinfo where there is one."""
+    from pusht.dreamer import platform_fingerprint
 
-    info = {}
+    fp, info = platform_fingerprint(), {}
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
             key, _, value = line.partition(":")
@@ -116,8 +117,7 @@ def host_description() -> str:
     cpu = info.get("model name") or platform.processor() or "unknown CPU"
     if "cpu family" in info:
         cpu += f" (family {info['cpu family']} model {info.get('model', '?')})"
-    return (f"{platform.machine()} {cpu}, {os.cpu_count()} cores, torch {torch.__version__} "
-            f"({torch.backends.cpu.get_cpu_capability()})")
+    return f"{fp['machine']} {cpu}, {os.cpu_count()} cores, torch {fp['torch']} ({fp['cpu_capability']})"
 
 
 def git_commit() -> str:
@@ -191,10 +191,9 @@ def main(argv=None):
 
     stamp = datetime.now(timezone.utc).isoformat(timespec="seconds")
     machine, commit = host_description(), git_commit()
-    kind = {True: "fastest", False: "median"}
     append_rows(args.csv, [[stamp, "cpu", machine, name, f"{value:.3f}", unit,
-                            f"{note}; {kind[name.endswith('fastest')]} of {args.repeats}", commit]
-                           for name, value, unit, note in rows])
+                            (f"{note}; {'fastest' if name.endswith('fastest') else 'median'} of "
+                             f"{args.repeats}"), commit] for name, value, unit, note in rows])
     print(f"appended {len(rows)} rows to {args.csv} ({machine}; commit {commit})")
 
 
