@@ -1,0 +1,683 @@
+"""Intake: turn the LMS download (a .zip or a folder) into one notebook per student and notebook.
+
+This is the first step of grading, and the only one that looks at what students uploaded before
+anything is run. Uploads are untrusted: a file name can try to escape the course folder
+(``../x_02_reward.ipynb``), claim another student (``alice/bob_02_reward.ipynb``) or be a zip bomb.
+Nothing here ever writes a file, and no name from the archive is ever used as a path: members are
+read into memory and every decision is recorded in words an instructor can read in report.csv.
+
+    from intake import collect, decode_notebook
+    intake = collect(Path("class.zip"), ["01_world_model.ipynb", "02_reward.ipynb", ...])
+    for student, uploads in intake.students.items():      # student: a folder-safe id
+        for name, upload in uploads.items():               # name: "02_reward.ipynb"
+            nb = decode_notebook(upload.data)              # ValueError: tell the student why
+
+Layouts accepted (after one optional wrapper folder that holds the whole class, as LMSs add):
+
+* flat:   ``<student>_<notebook>.ipynb``       e.g. ``s042_02_reward.ipynb``, ``john_doe_02_reward.ipynb``
+* folder: ``<student>/<notebook>.ipynb``       e.g. ``s042/02_reward.ipynb``
+          ``<student>/<student>_<notebook>.ipynb`` (the same student twice) is fine too.
+
+The notebook part must be one of the assignment's notebooks (its two-digit number AND its name,
+in any letter case), at the END of the name, so a student id may itself contain underscores.
+It may carry a re-upload suffix, which also counts as "how many times re-uploaded" when two uploads
+have the same time: ``02_reward (1)``, ``02_reward(2)``, ``02_reward-1``, ``02_reward_2``,
+``02_reward_v2``, ``02_reward-Copy1`` (Jupyter's duplicate) all mean 02_reward. Colab's
+``Copy of 02_reward`` is accepted as well. Anything else after the name (``02_reward_final``,
+``02_reward_solution``) is refused: it names no notebook of this assignment.
+
+Student ids (see :func:`normalise_student_id`): the id the LMS wrote is kept for the report
+(``Intake.display_names``) and turned into ONE folder-safe form that nbgrader uses as folder name
+and gradebook key: ``Ann Lee`` -> ``Ann_Lee``, ``Zoë`` -> ``Zoë``. Two different ids that would
+become the same folder (``Ann Lee`` and ``Ann_Lee``, or ``Ann_Lee`` and ``ann_lee``, which are one
+folder on macOS and Windows) are never merged: both are graded separately, the second one as
+``Ann_Lee~2``, and both students' notes say so. The same name typed in two Unicode forms (``Chloé``
+composed or decomposed, as macOS writes it) is the same student.
+"""
+
+from __future__ import annotations
+
+import codecs
+import json
+import os
+import re
+import stat
+import unicodedata
+import zipfile
+from dataclasses import dataclass, field
+from datetime import datetime
+from pathlib import Path
+from typing import Callable
+
+import nbformat
+
+MB = 2 ** 20
+MAX_NOTEBOOK_BYTES = 50 * MB     # a chapter notebook with outputs is < 5 MB; 50 MB is surely wrong
+MAX_TOTAL_BYTES = 2048 * MB      # everything read from one class download, all students together
+MAX_MEMBERS = 100_000            # entries in the archive (or files in the folder) looked at
+MAX_ID_CHARS = 64                # nbgrader's gradebook holds 128; folders hold 255 bytes
+MAX_ID_BYTES = 200
+REDOWNLOAD = ("Open the notebook in Jupyter or Colab, use File > Download > Download .ipynb, and "
+              "upload the .ipynb file that this saves.")
+
+# Names of files and folders that operating systems and Jupyter add: ignored, never graded.
+_JUNK = {"__macosx", "thumbs.db", "desktop.ini", "__pycache__"}
+# Invisible characters that reverse the direction of text: a name containing them can look like
+# another one in a listing, so such a member is refused.
+_BIDI = set("\u200e\u200f\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069\u061c")
+_WINDOWS_RESERVED = {"con", "prn", "aux", "nul", *(f"com{i}" for i in range(10)),
+                     *(f"lpt{i}" for i in range(10))}
+# After the notebook's name: " (1)", "(2)", "-1", "_2", " 3", "_v2", "-Copy1", "v2".
+_SUFFIX = r"(?:\s*\(\s*(?P<n1>\d{1,4})\s*\)|[-_ ]?(?:v|copy)?(?P<n2>\d{1,4}))?"
+
+
+@dataclass
+class Upload:
+    """One uploaded file: its bytes (never written anywhere by intake), the name it had in the
+    archive or folder (``member``), and when it was saved (``mtime``: the zip entry's date, or
+    the file's modification time for a folder; local time, no time zone)."""
+    data: bytes
+    member: str
+    mtime: datetime
+
+
+@dataclass
+class Intake:
+    """What was found in a class download.
+
+    ``students``: folder-safe student id -> {notebook file name, e.g. "02_reward.ipynb": Upload}.
+        Every student the download names is here, even one whose every file was refused (an
+        empty dict: grade them 0 and show their notes).
+    ``notes``: student id -> lines for that student's row in report.csv (which upload was graded
+        and which ignored, what was refused and why).
+    ``rejected``: one line per file that was graded for nobody: which member and why.
+    ``display_names``: student id -> the id exactly as the LMS wrote it (Unicode NFC), for the
+        report and for matching grades back to the LMS.
+    """
+    students: dict[str, dict[str, Upload]] = field(default_factory=dict)
+    notes: dict[str, list[str]] = field(default_factory=dict)
+    rejected: list[str] = field(default_factory=list)
+    display_names: dict[str, str] = field(default_factory=dict)
+
+
+class _Refused(Exception):
+    """A member that cannot be placed; the message says why."""
+
+
+# --- student ids ---------------------------------------------------------------------------------
+def _id_char_ok(c: str) -> bool:
+    """Letters and digits of any script, their accents, and ``- . _``."""
+    return c.isalnum() or c in "-._" or unicodedata.category(c).startswith("M")
+
+
+def normalise_student_id(raw: str) -> str:
+    """The folder-safe form of a student id as the LMS wrote it, or ValueError.
+
+    The rule, in order:
+
+    1. Unicode NFC (so a name typed with a composed ``é`` and one with ``e`` + accent are one),
+       then leading and trailing spaces are removed;
+    2. every run of spaces or of characters other than letters, digits, accents, ``-``, ``.`` and
+       ``_`` becomes one ``_``: ``Ann Lee`` -> ``Ann_Lee``, ``Lee, Ann`` -> ``Lee_Ann``; letters
+       keep their case and accents (``Zoë``, ``Chloé``), so the folder reads like the name;
+    3. leading ``.`` and ``-`` (hidden files, command-line options) and trailing ``.`` (dropped by
+       Windows) are removed; a Windows device name (``CON``, ``NUL``, ``COM1``...) gets a ``_`` in
+       front; more than 64 characters are cut to 64.
+
+    What comes out is one path component on Linux, macOS and Windows (no ``/ \\ :``, no control
+    characters, never ``.``, ``..`` or empty) and a valid nbgrader student id: nbgrader strips
+    spaces from ids, uses the id as a file glob (so ``* ? [ ]`` are replaced), splits
+    ``--student_id_exclude`` at commas and the exchange at ``+`` (both replaced), and its gradebook
+    column holds 128 characters. An id with no letter or digit at all (``..``, ``___``) is refused.
+    """
+    s = unicodedata.normalize("NFC", raw).strip()
+    out, run = [], False
+    for c in s:
+        if _id_char_ok(c):
+            out.append(c)
+            run = False
+        elif not run:
+            out.append("_")
+            run = True
+    s = "".join(out).lstrip(".-").rstrip(".")
+    if s.split(".")[0].casefold() in _WINDOWS_RESERVED:
+        s = "_" + s
+    if len(s) > MAX_ID_CHARS:
+        s = s[:MAX_ID_CHARS]
+    while len(s.encode("utf-8")) > MAX_ID_BYTES:
+        s = s[:-1]
+    s = s.rstrip(".")
+    if not any(c.isalnum() for c in s):
+        raise ValueError(f"student id {raw!r} has no letter or digit that could name a folder")
+    return s
+
+
+def _id_key(safe: str) -> str:
+    """Two ids with the same key would be the same folder somewhere (case-insensitive disks)."""
+    return unicodedata.normalize("NFC", safe.casefold())
+
+
+# --- member names --------------------------------------------------------------------------------
+def _member_parts(name: str) -> list[str]:
+    """The components of a member's name, or _Refused for a name that is hostile or broken.
+
+    Both ``/`` and ``\\`` separate components (Windows zip tools write ``\\``); ``.`` and empty
+    components are dropped; the name is only ever split into strings, never used as a path.
+    """
+    if "\x00" in name:
+        raise _Refused("its name contains a NUL character (a trick to hide the real name)")
+    if any(unicodedata.category(c) == "Cc" for c in name):
+        raise _Refused("its name contains control characters")
+    if any(c in _BIDI for c in name):
+        raise _Refused("its name contains invisible text-direction characters")
+    if any(0xD800 <= ord(c) <= 0xDFFF for c in name):
+        raise _Refused("its name is not valid UTF-8 text")
+    if name.startswith(("/", "\\")):
+        raise _Refused("it has an absolute path (starts with / or \\)")
+    if re.match(r"[A-Za-z]:", name):
+        raise _Refused("it has a Windows drive letter (an absolute path)")
+    if ":" in name:
+        raise _Refused("its name contains ':' (a drive letter or a Windows alternate data stream)")
+    raw_parts = re.split(r"[/\\]", name)
+    for p in raw_parts:
+        if p.strip(" ") and set(p.strip(" ")) == {"."} and len(p.strip(" ")) >= 2:
+            raise _Refused("its path contains '..' (it tries to leave the submissions folder)")
+    parts = [unicodedata.normalize("NFC", p) for p in raw_parts if p.strip() not in ("", ".")]
+    if not parts:
+        raise _Refused("its name is empty once '.' and '/' are removed")
+    return parts
+
+
+def _is_junk(parts: list[str]) -> bool:
+    return any(p.startswith(".") or p.casefold() in _JUNK for p in parts)
+
+
+class _Names:
+    """Parses the file-name part of a member against the assignment's notebooks."""
+
+    def __init__(self, notebooks: list[str]):
+        bad = [n for n in notebooks if not n.endswith(".ipynb")]
+        if bad or not notebooks:
+            raise ValueError(f"notebooks must be file names ending in .ipynb, got {notebooks!r}")
+        self.canonical = {n[:-len(".ipynb")].casefold(): n for n in notebooks}
+        stems = sorted((n[:-len(".ipynb")] for n in notebooks), key=len, reverse=True)
+        alts = "|".join(re.escape(s) for s in stems)
+        self.re = re.compile(rf"^(?:(?P<prefix>.+?)_)??(?:copy of\s*)?(?P<nb>{alts}){_SUFFIX}\.ipynb$",
+                             re.IGNORECASE)
+        # Only to say whose file it was when the notebook part matches nothing.
+        self.loose = re.compile(r"^(?P<prefix>.+?)_(?P<nb>\d\d_.*)$")
+        self.expected = ", ".join(notebooks)
+
+    def parse(self, base: str) -> tuple[str | None, str, int] | None:
+        """(student prefix or None, notebook file name, re-upload counter), or None."""
+        m = self.re.match(base)
+        if not m:
+            return None
+        counter = int(m["n1"] or m["n2"] or 0)
+        return m["prefix"], self.canonical[m["nb"].casefold()], counter
+
+    def loose_prefix(self, base: str) -> str | None:
+        m = self.loose.match(Path(base).stem)
+        return m["prefix"] if m else None
+
+
+# --- reading the download ------------------------------------------------------------------------
+@dataclass
+class _Entry:
+    member: str
+    size: int
+    mtime: datetime
+    read: Callable[[int], bytes]     # read(cap) -> bytes, or raises _Refused
+    parts: list[str] = field(default_factory=list)
+
+
+def _size(n: int) -> str:
+    return f"{n / MB:.0f} MB" if n >= MB else f"{n / 1024:.0f} kB" if n >= 1024 else f"{n} bytes"
+
+
+def _read_capped(f, cap: int) -> bytes:
+    """Read at most ``cap`` bytes; a member that inflates past its declared size stops here."""
+    chunks, total = [], 0
+    while True:
+        chunk = f.read(min(MB, cap + 1 - total))
+        if not chunk:
+            return b"".join(chunks)
+        chunks.append(chunk)
+        total += len(chunk)
+        if total > cap:
+            raise _Refused(f"it unpacks to more than {_size(cap)} (a zip bomb, or not a notebook)")
+
+
+def _zip_name(info: zipfile.ZipInfo) -> str:
+    """The member's name as its author meant it: many zip tools write UTF-8 without saying so."""
+    name = info.orig_filename
+    if not info.flag_bits & 0x800:
+        try:
+            name = name.encode("cp437").decode("utf-8")
+        except (UnicodeEncodeError, UnicodeDecodeError):
+            pass
+    return name
+
+
+def _zip_entries(zf: zipfile.ZipFile, rejected: list[str], max_members: int):
+    infos = zf.infolist()
+    if len(infos) > max_members:
+        rejected.append(f"{len(infos) - max_members} archive entries after the first {max_members}: "
+                        f"not looked at (too many entries)")
+        infos = infos[:max_members]
+    for info in infos:
+        name = _zip_name(info)
+        mode = info.external_attr >> 16
+        if info.is_dir() or stat.S_ISDIR(mode):
+            continue
+        if stat.S_ISLNK(mode):
+            rejected.append(f"{name!r}: refused: it is a symbolic link, not a file")
+            continue
+        if stat.S_IFMT(mode) not in (0, stat.S_IFREG):
+            rejected.append(f"{name!r}: refused: it is not a regular file")
+            continue
+        try:
+            when = datetime(*info.date_time)
+        except (TypeError, ValueError):
+            when = datetime(1980, 1, 1)
+
+        def read(cap, info=info):
+            if info.flag_bits & 0x1:
+                raise _Refused("it is password-protected in the zip")
+            try:
+                with zf.open(info) as f:
+                    return _read_capped(f, cap)
+            except _Refused:
+                raise
+            except Exception as e:   # bad CRC, truncated archive, unsupported compression
+                raise _Refused(f"it could not be read from the zip ({type(e).__name__}: {e})") from None
+        yield _Entry(name, info.file_size, when, read)
+
+
+def _read_file(path: str, cap: int) -> bytes:
+    flags = os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_BINARY", 0)
+    try:
+        fd = os.open(path, flags)
+    except OSError as e:
+        raise _Refused(f"it could not be opened ({e.strerror})") from None
+    with os.fdopen(fd, "rb") as f:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise _Refused("it is not a regular file")
+        return _read_capped(f, cap)
+
+
+def _folder_entries(root: Path, rejected: list[str], max_members: int):
+    """Every regular file under ``root``, without following symbolic links."""
+    count = 0
+    stack: list[tuple[str, tuple[str, ...]]] = [(str(root), ())]
+    while stack:
+        folder, rel = stack.pop()
+        try:
+            with os.scandir(folder) as it:
+                entries = sorted(it, key=lambda e: e.name)
+        except OSError as e:
+            rejected.append(f"{'/'.join(rel) or '.'}/: could not be listed ({e.strerror})")
+            continue
+        for e in entries:
+            member = "/".join(rel + (e.name,))
+            if e.is_symlink():
+                rejected.append(f"{member!r}: refused: it is a symbolic link (never followed)")
+            elif e.is_dir(follow_symlinks=False):
+                if e.name.startswith(".") or e.name.casefold() in _JUNK:
+                    rejected.append(f"{member!r}/: ignored: hidden or system folder")
+                elif len(rel) >= 8:
+                    rejected.append(f"{member!r}/: ignored: nested too deep")
+                else:
+                    stack.append((e.path, rel + (e.name,)))
+            elif e.is_file(follow_symlinks=False):
+                count += 1
+                if count > max_members:
+                    rejected.append(f"{member!r}: not looked at (more than {max_members} files)")
+                    continue
+                st = e.stat(follow_symlinks=False)
+                yield _Entry(member, st.st_size, datetime.fromtimestamp(st.st_mtime),
+                             lambda cap, p=e.path: _read_file(p, cap))
+            else:
+                rejected.append(f"{member!r}: refused: it is not a regular file")
+
+
+# --- collect -------------------------------------------------------------------------------------
+@dataclass
+class _Candidate:
+    entry: _Entry
+    original: str        # the student id as written (NFC, stripped)
+    notebook: str
+    counter: int
+    order: int
+
+
+def collect(submissions: Path, notebooks: list[str], *,
+            max_member_bytes: int = MAX_NOTEBOOK_BYTES,
+            max_total_bytes: int = MAX_TOTAL_BYTES,
+            max_members: int = MAX_MEMBERS) -> Intake:
+    """Find each student's upload of each notebook in a class download; read, never extract.
+
+    ``submissions``: the LMS's .zip, or a folder (symbolic links in it are never followed).
+    ``notebooks``: the assignment's notebook file names, e.g. ``["01_world_model.ipynb", ...]``.
+    ``max_member_bytes``: a file larger than this (as the zip declares it, and as it really
+    unpacks) is refused; ``max_total_bytes``: all files read together stop there (zip bombs).
+
+    Rules (every refusal is a line in ``rejected``, and a note for the student when it is clear
+    whose file it was):
+
+    * hostile names are refused and never used as paths: absolute (``/x``, ``C:\\x``,
+      ``\\\\server\\x``), any ``..``, NUL or control characters, symbolic links;
+    * system files (``__MACOSX/``, ``.DS_Store``, ``.ipynb_checkpoints/``, hidden files) are ignored;
+    * one top-level folder holding the whole class (student folders, or the flat files of several
+      students) is a wrapper and is skipped; deeper nesting than ``<student>/<file>`` is refused;
+    * ``<folder>/<other>_02_reward.ipynb``, a file that names a student other than its folder,
+      is graded for NOBODY: the folder decides who uploaded it, the name claims someone else, and
+      neither can be trusted; the folder's student is told to rename it;
+    * several uploads of one notebook by one student: the newest is graded (modification time;
+      on a tie the larger re-upload counter, ``(2)`` over ``(1)`` over none; then the later entry
+      in the archive); the note names the one graded and those ignored. If the newest cannot be
+      read at all (too big, corrupt), the next newest is graded and the note says so.
+    """
+    submissions = Path(submissions)
+    names = _Names(notebooks)
+    intake = Intake()
+    rejected = intake.rejected
+    if submissions.is_dir():
+        entries = list(_folder_entries(submissions, rejected, max_members))
+        return _collect(entries, names, intake, max_member_bytes, max_total_bytes)
+    try:
+        zf = zipfile.ZipFile(submissions)
+    except (zipfile.BadZipFile, OSError) as e:
+        raise ValueError(f"{submissions} is neither a folder nor a readable .zip file ({e})") from None
+    with zf:
+        entries = list(_zip_entries(zf, rejected, max_members))
+        return _collect(entries, names, intake, max_member_bytes, max_total_bytes)
+
+
+def _collect(entries: list[_Entry], names: _Names, intake: Intake,
+             max_member_bytes: int, max_total_bytes: int) -> Intake:
+    rejected = intake.rejected
+    pending_notes: list[tuple[str, str]] = []   # (student as written, note)
+    known: set[str] = set()                     # students as written, who get a report row
+
+    # 1. hostile and system names out
+    usable: list[_Entry] = []
+    for e in entries:
+        try:
+            e.parts = _member_parts(e.member)
+        except _Refused as why:
+            rejected.append(f"{e.member!r}: refused: {why}")
+            continue
+        if _is_junk(e.parts):
+            rejected.append(f"{e.member!r}: ignored: a system or hidden file, not a submission")
+            continue
+        usable.append(e)
+
+    # 2. a wrapper folder around the whole class?
+    tops = {e.parts[0] for e in usable if len(e.parts) > 1}
+    if len(tops) == 1 and all(len(e.parts) > 1 for e in usable):
+        wrapper = tops.pop()
+        inner = [e for e in usable if len(e.parts) == 2]
+        claimed = set()
+        for e in inner:
+            parsed = names.parse(e.parts[1])
+            if parsed and parsed[0]:
+                try:
+                    claimed.add(_id_key(normalise_student_id(parsed[0])))
+                except ValueError:
+                    pass
+        try:
+            own = _id_key(normalise_student_id(wrapper))
+        except ValueError:
+            own = None
+        if any(len(e.parts) > 2 for e in usable) or (len(claimed) >= 2 and own not in claimed):
+            for e in usable:
+                e.parts = e.parts[1:]
+
+    # 3. who and which notebook
+    candidates: list[_Candidate] = []
+    for order, e in enumerate(usable):
+        parts, base = e.parts, e.parts[-1]
+        if len(parts) > 2:
+            rejected.append(f"{e.member!r}: refused: nested too deep; expected <student>_<notebook>.ipynb "
+                            f"or <student>/<notebook>.ipynb")
+            continue
+        folder = parts[0].strip() if len(parts) == 2 else None
+        if folder is not None:
+            try:
+                normalise_student_id(folder)
+            except ValueError as why:
+                rejected.append(f"{e.member!r}: refused: {why}")
+                continue
+            known.add(unicodedata.normalize("NFC", folder))
+        if not base.casefold().endswith(".ipynb"):
+            who = folder or names.loose_prefix(base)
+            rejected.append(f"{e.member!r}: refused: not a .ipynb notebook file")
+            if who:
+                pending_notes.append((who, f"{base}: not a .ipynb notebook, not graded. {REDOWNLOAD}"))
+            continue
+        parsed = names.parse(base)
+        if parsed is None:
+            who = folder or names.loose_prefix(base)
+            if folder is None and who is None:
+                rejected.append(f"{e.member!r}: refused: the name is not <student>_<notebook>.ipynb "
+                                f"with a notebook of this assignment ({names.expected})")
+            else:
+                rejected.append(f"{e.member!r}: refused: names no notebook of this assignment "
+                                f"(expected one of {names.expected})")
+                pending_notes.append((who, f"{base}: names no notebook of this assignment, not graded; "
+                                           f"the notebooks are {names.expected}"))
+            continue
+        prefix, notebook, counter = parsed
+        if folder is None:
+            if prefix is None:
+                rejected.append(f"{e.member!r}: refused: no student id in the name; expected "
+                                f"<student>_{notebook} or <student>/{notebook}")
+                continue
+            student = prefix
+        else:
+            student = folder
+            if prefix is not None and _same_student(prefix, folder) is False:
+                rejected.append(f"{e.member!r}: refused: the file name names student {prefix.strip()!r} but "
+                                f"it is in the folder of {folder!r}; graded for nobody")
+                pending_notes.append((folder, f"{base}: its name says it belongs to {prefix.strip()!r}, not to "
+                                              f"you, so it was not graded for anyone; rename it "
+                                              f"{notebook} and upload it again"))
+                continue
+        original = unicodedata.normalize("NFC", student).strip()
+        try:
+            normalise_student_id(original)
+        except ValueError as why:
+            rejected.append(f"{e.member!r}: refused: {why}")
+            continue
+        if e.size > max_member_bytes:
+            rejected.append(f"{e.member!r}: refused: it is {_size(e.size)}, more than the "
+                            f"{_size(max_member_bytes)} limit for one file")
+            pending_notes.append((original, f"{base}: {_size(e.size)}, too big to be this notebook; "
+                                            f"not graded. Clear the outputs, save, and upload it again"))
+            known.add(original)
+            continue
+        known.add(original)
+        candidates.append(_Candidate(e, original, notebook, counter, order))
+
+    # 4. one folder-safe id per student as written; collisions are told, never merged
+    ids = _assign_ids(known, intake)
+
+    # 5. the newest readable upload of each notebook
+    groups: dict[tuple[str, str], list[_Candidate]] = {}
+    for c in candidates:
+        groups.setdefault((ids[c.original], c.notebook), []).append(c)
+    total = 0
+    for (sid, notebook), group in sorted(groups.items()):
+        group.sort(key=lambda c: (c.entry.mtime, c.counter, c.order), reverse=True)
+        graded, failed = None, []
+        for c in group:
+            if total + c.entry.size > max_total_bytes:
+                why = f"the class download passed the {_size(max_total_bytes)} limit for all files together"
+            else:
+                try:
+                    data = c.entry.read(min(max_member_bytes, max_total_bytes - total))
+                    total += len(data)
+                    graded = (c, data)
+                    break
+                except _Refused as e:
+                    why = str(e)
+            rejected.append(f"{c.entry.member!r}: refused: {why}")
+            failed.append(f"{_short(c.entry)} could not be read ({why})")
+        notes = intake.notes.setdefault(sid, [])
+        if graded is None:
+            notes.append(f"{notebook}: not graded: " + "; ".join(failed))
+            continue
+        c, data = graded
+        intake.students.setdefault(sid, {})[notebook] = Upload(data, c.entry.member, c.entry.mtime)
+        ignored = group[group.index(c) + 1:]     # older than the graded one
+        if len(group) > 1:
+            line = f"{notebook}: {len(group)} uploads; graded {_short(c.entry)}, the newest"
+            if failed:
+                line += " that could be read; " + "; ".join(failed)
+            if ignored:
+                line += "; ignored the older " + ", ".join(_short(x.entry) for x in ignored)
+            notes.append(line)
+
+    for who, note in pending_notes:
+        sid = ids.get(unicodedata.normalize("NFC", who).strip())
+        if sid:
+            intake.notes.setdefault(sid, []).append(note)
+    for sid in ids.values():
+        intake.students.setdefault(sid, {})
+        intake.notes.setdefault(sid, [])
+    intake.students = dict(sorted(intake.students.items()))
+    intake.notes = dict(sorted(intake.notes.items()))
+    return intake
+
+
+def _same_student(a: str, b: str) -> bool:
+    try:
+        return _id_key(normalise_student_id(a)) == _id_key(normalise_student_id(b))
+    except ValueError:
+        return False
+
+
+def _short(e: _Entry) -> str:
+    return f"{e.member!r} ({e.mtime:%Y-%m-%d %H:%M:%S})"
+
+
+def _assign_ids(originals: set[str], intake: Intake) -> dict[str, str]:
+    """{student as written: folder-safe id}. When different ids would make the same folder, the
+    one already folder-safe (else the first in alphabetical order) keeps it, the others get
+    ``~2``, ``~3``... (``~`` never appears in a normalised id, so these cannot collide)."""
+    by_key: dict[str, list[str]] = {}
+    for o in originals:
+        by_key.setdefault(_id_key(normalise_student_id(o)), []).append(o)
+    ids = {}
+    for group in by_key.values():
+        group.sort(key=lambda o: (normalise_student_id(o) != o, o))
+        base = normalise_student_id(group[0])
+        for i, o in enumerate(group):
+            sid = base if i == 0 else f"{base}~{i + 1}"
+            ids[o] = sid
+            intake.display_names[sid] = o
+            notes = intake.notes.setdefault(sid, [])
+            if len(group) > 1:
+                others = ", ".join(repr(x) for x in group if x != o)
+                notes.append(f"student id {o!r} and {others} would be the same folder {base!r}; they are "
+                             f"graded as different students, this one as {sid!r}: check that this is right")
+            if len(o) > MAX_ID_CHARS or len(o.encode("utf-8")) > MAX_ID_BYTES:
+                notes.append(f"student id {o!r} is longer than {MAX_ID_CHARS} characters; graded as {sid!r}")
+    return ids
+
+
+# --- decode --------------------------------------------------------------------------------------
+_BOMS = [(codecs.BOM_UTF32_LE, "utf-32-le"), (codecs.BOM_UTF32_BE, "utf-32-be"),
+         (codecs.BOM_UTF8, "utf-8"), (codecs.BOM_UTF16_LE, "utf-16-le"), (codecs.BOM_UTF16_BE, "utf-16-be")]
+
+
+def _magic_hint(data: bytes) -> str:
+    head = data.lstrip()[:16]
+    if head.startswith(b"PK\x03\x04"):
+        return "it is a zip archive, not a notebook"
+    if head.startswith(b"%PDF"):
+        return "it is a PDF, not a notebook"
+    if head.startswith((b"\x89PNG", b"\xff\xd8\xff", b"GIF8")):
+        return "it is an image, not a notebook"
+    if head[:1] == b"<":
+        return "it is a web page (HTML), not a notebook: the browser saved the page, not the file"
+    return ""
+
+
+def _detect_encoding(data: bytes) -> tuple[str, bytes]:
+    """(encoding, bytes without BOM): a byte-order mark, else the pattern of NUL bytes around the
+    first character (a notebook starts with '{' or a space, plain ASCII), else UTF-8."""
+    for bom, enc in _BOMS:
+        if data.startswith(bom):
+            return enc, data[len(bom):]
+    h = data[:4]
+    if len(h) == 4 and h[:3] == b"\0\0\0" and h[3]:
+        return "utf-32-be", data
+    if len(h) == 4 and h[0] and h[1:] == b"\0\0\0":
+        return "utf-32-le", data
+    if len(h) >= 2 and h[0] == 0 and h[1]:
+        return "utf-16-be", data
+    if len(h) >= 2 and h[0] and h[1] == 0:
+        return "utf-16-le", data
+    return "utf-8", data
+
+
+def _parse(text: str) -> nbformat.NotebookNode:
+    """The notebook in ``text``, or ValueError saying what is wrong with it."""
+    text = text.lstrip("\ufeff")
+    try:
+        obj = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise ValueError(f"it is not valid JSON (line {e.lineno}, column {e.colno}: {e.msg})") from None
+    except RecursionError:
+        raise ValueError("it is JSON nested too deep to be a notebook") from None
+    if not isinstance(obj, dict) or "nbformat" not in obj:
+        raise ValueError("it is JSON but not a Jupyter notebook (no 'nbformat' field)")
+    version = obj.get("nbformat")
+    if not isinstance(version, int) or not 1 <= version <= 4:
+        raise ValueError(f"it says it is notebook format {version!r}; this course reads formats 1 to 4")
+    try:
+        return nbformat.reads(text, as_version=4)
+    except Exception as e:   # schema or conversion problems: not a notebook we can grade
+        raise ValueError(f"it is not a readable notebook ({type(e).__name__}: {str(e)[:120]})") from None
+
+
+def decode_notebook(data: bytes, max_bytes: int = MAX_NOTEBOOK_BYTES) -> nbformat.NotebookNode:
+    """The notebook in an uploaded file, as nbformat 4, or ValueError with a message for the student.
+
+    Read as UTF-8 (with or without a byte-order mark), UTF-16 or UTF-32 (little or big endian,
+    with or without a byte-order mark, told apart by where the NUL bytes are), and, only when
+    none of these works, as Windows-1252 or Latin-1 if that gives a notebook. Old notebooks
+    (format 3 and before) are converted. The message of the ValueError says what the file is
+    instead (empty, HTML, PDF, zip, not JSON, JSON but not a notebook, too big) and ends with
+    what to do about it.
+    """
+    try:
+        if len(data) > max_bytes:
+            raise ValueError(f"the file is {_size(len(data))}, more than the {_size(max_bytes)} a "
+                             f"notebook can be; clear the outputs (Edit > Clear all outputs), save")
+        if not data.strip():
+            raise ValueError("the file is empty")
+        enc, body = _detect_encoding(data)
+        try:
+            text = body.decode(enc)
+        except UnicodeDecodeError:
+            if enc != "utf-8":
+                raise ValueError(f"it looks like {enc.upper()} text but is not valid {enc.upper()}") from None
+            hint = _magic_hint(data)
+            if hint:
+                raise ValueError(hint) from None
+            for legacy in ("cp1252", "latin-1"):
+                try:
+                    return _parse(body.decode(legacy))
+                except (UnicodeDecodeError, ValueError):
+                    pass
+            raise ValueError("it is not text in a known encoding (UTF-8, UTF-16, UTF-32)") from None
+        try:
+            return _parse(text)
+        except ValueError as e:
+            hint = _magic_hint(data)
+            raise ValueError(hint or str(e)) from None
+    except ValueError as e:
+        raise ValueError(f"not a notebook: {e}. {REDOWNLOAD}") from None
