@@ -21,7 +21,7 @@ class Config:
     smoke: bool = False
     """Tiny config that runs in a few seconds (for CI and quick checks); see SMOKE below."""
     device: str = "cpu"
-    """Torch device. Results are recorded (and reproducible bit for bit) on the CPU."""
+    """Torch device. Results are recorded on the CPU (bit for bit reproducible on the same platform)."""
     threads: int = 1
     """Torch CPU threads. One is faster at these sizes and keeps the float sums in a fixed order."""
 

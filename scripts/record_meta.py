@@ -1,15 +1,23 @@
 """Re-measure the chapter's headline numbers and write them to meta.yaml.
 
     python scripts/record_meta.py            # seeds 0-2 at the default config + horizon sweep
+                                             # + the tolerance bands (fresh process per code path)
+    python scripts/record_meta.py --tolerance-only   # re-measure only the bands, keep the rest
 
 Every number in meta.yaml comes from this script's runs; the chapter page's own figures are stored
 beside ours (under ``page``) so a reader can compare, never mixed into them. The determinism test
-(tests/test_reproduce.py) re-runs seed 0 and checks it against the ``seeds`` block here.
+(tests/test_reproduce.py) re-runs seed 0 and checks it against the ``seeds`` block here: bit for
+bit where the platform's float-deciding fingerprint (``dreamer.FLOAT_KEYS``) matches the recorded
+one, and elsewhere within the ``tolerance`` bands this script measures (see ``measure_tolerance``).
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
+import json
+import os
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -21,7 +29,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "scripts"))
 
 from pusht.config import make_config  # noqa: E402
-from pusht.dreamer import platform_fingerprint, run  # noqa: E402
+from pusht.dreamer import FLOAT_KEYS, platform_fingerprint, run  # noqa: E402
 from pusht.page import PAGE  # noqa: E402
 
 HEADLINE = ["imagined_return_per_step", "real_return_per_step", "imagination_gap",
@@ -48,6 +56,145 @@ def acceptance(m: dict) -> dict:
     }
 
 
+# --- tolerance bands: how far the headline metrics move when only the float code path changes ------
+# Each variant is a fresh process (both variables are read once, when torch loads). MKL_CBWR picks
+# MKL's matrix-multiply code path (on a non-Intel CPU MKL honours only COMPATIBLE and falls back to
+# its own choice for the others; variants that land on the same path are measured once).
+# ATEN_CPU_CAPABILITY picks torch's own vectorised kernels, as on a CPU without AVX512 (or AVX2).
+# One more variant runs with two threads instead of one: the same code, its sums split differently.
+MKL_CBWR_VALUES = [None, "COMPATIBLE", "AVX", "AVX2", "AVX512", "AVX512_E1"]
+ATEN_VALUES = [None, "avx2", "default"]
+TOLERANCE_SEEDS = [0, 1, 2]
+# band = SAFETY_FACTOR x the widest spread between code paths (max over the seeds). Why 4: the few
+# paths one host offers sample the variation thinly; the one cross-vendor figure known (issue 9: an
+# Intel Xeon, same torch and AVX512, seed-0 gap +0.2317 against +0.2352 recorded here) lies 2.6x
+# this host's widest seed-0 spread away, so 4x covers it with margin, and every band stays far
+# below the seed-to-seed range, so a real change of the code still fails the check.
+SAFETY_FACTOR = 4
+# ... but never below the resolution of the metric: metrics are rounded to 6 decimals, and a count
+# of episodes can flip by one when a contact is decided by the last bits.
+FLOOR, COUNT_FLOOR = 1e-6, 1
+COUNTS = ("real_episodes_touching_block",)
+
+
+def _env(mkl_cbwr, aten):
+    env = {k: v for k, v in os.environ.items() if k not in ("MKL_CBWR", "ATEN_CPU_CAPABILITY")}
+    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
+    if mkl_cbwr:
+        env["MKL_CBWR"] = mkl_cbwr
+    if aten:
+        env["ATEN_CPU_CAPABILITY"] = aten
+    return env
+
+
+def _worker(seeds, threads: int = 1) -> None:
+    """Child process: print one JSON line per seed (headline metrics, the gap at full precision,
+    a hash of the trained weights) after the platform line."""
+    print(json.dumps(platform_fingerprint()), flush=True)
+    for seed in seeds:
+        res = run(make_config(seed=seed, threads=threads), log=None)
+        gap = (float(res.rollouts["dream"].return_per_step.mean())
+               - float(res.rollouts["real"].return_per_step.mean()))
+        h = hashlib.sha256()
+        for model in (res.wm, res.agent):
+            for t in model.state_dict().values():
+                h.update(t.detach().cpu().contiguous().numpy().tobytes())
+        print(json.dumps({"seed": seed, "imagination_gap_full": repr(gap),
+                          "weights_sha256": h.hexdigest()[:16],
+                          **{k: res.metrics[k] for k in HEADLINE}}), flush=True)
+
+
+def _child(args, mkl_cbwr=None, aten=None) -> list[str]:
+    cmd = [sys.executable, str(Path(__file__).resolve()), *args]
+    out = subprocess.run(cmd, env=_env(mkl_cbwr, aten), cwd=ROOT, check=True, capture_output=True,
+                         text=True).stdout
+    return out.strip().splitlines()
+
+
+def code_path(fp: dict, threads: int = 1) -> str:
+    label = f"mkl {fp['mkl_path']}, aten {fp['cpu_capability']}"
+    return label + (f", {threads} threads" if threads > 1 else "")
+
+
+def measure_tolerance(seeds=TOLERANCE_SEEDS, log=print, jobs: int = 2) -> dict:
+    """Re-run ``seeds`` under every distinct float code path this host offers; return the
+    ``tolerance`` section: per headline metric the widest spread between paths and the band.
+    ``jobs`` variant processes run at once (each single-threaded; that changes no number)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    mkl_paths, aten_paths = {}, {}                  # code path -> the variable that gives it
+    for mkl_cbwr in MKL_CBWR_VALUES:
+        mkl_paths.setdefault(json.loads(_child(["--probe"], mkl_cbwr)[0])["mkl_path"], mkl_cbwr)
+    for aten in ATEN_VALUES:
+        aten_paths.setdefault(json.loads(_child(["--probe"], None, aten)[0])["cpu_capability"], aten)
+    todo = [(m, a, 1) for m in mkl_paths.values() for a in aten_paths.values()] + [(None, None, 2)]
+
+    def measure(job):
+        mkl_cbwr, aten, threads = job
+        t = time.perf_counter()
+        lines = _child(["--worker", *map(str, seeds), "--worker-threads", str(threads)], mkl_cbwr, aten)
+        return job, lines, time.perf_counter() - t
+
+    variants, runs = {}, []
+    with ThreadPoolExecutor(jobs) as pool:
+        for (mkl_cbwr, aten, threads), lines, seconds in pool.map(measure, todo):
+            label = code_path(json.loads(lines[0]), threads)
+            runs.append({"label": label, "MKL_CBWR": mkl_cbwr, "ATEN_CPU_CAPABILITY": aten,
+                         "threads": threads})
+            for line in lines[1:]:
+                m = json.loads(line)
+                variants.setdefault(m.pop("seed"), {})[label] = m
+            log(f"  {label} (MKL_CBWR={mkl_cbwr}, ATEN_CPU_CAPABILITY={aten}): gap "
+                + " ".join(variants[s][label]["imagination_gap_full"][:9] for s in seeds)
+                + f"  ({seconds:.0f} s)", flush=True)
+    spread = {k: max(max(v[k] for v in variants[s].values()) - min(v[k] for v in variants[s].values())
+                     for s in seeds) for k in HEADLINE}
+    band = {k: round(max(SAFETY_FACTOR * spread[k], COUNT_FLOOR if k in COUNTS else FLOOR), 6)
+            for k in HEADLINE}
+    here = platform_fingerprint()
+    return {
+        "how": (f"scripts/record_meta.py: seeds {list(seeds)} at the default config, one fresh process "
+                f"per float code path: MKL_CBWR in {MKL_CBWR_VALUES[1:]} or unset, crossed with "
+                f"ATEN_CPU_CAPABILITY in {ATEN_VALUES[1:]} or unset (values landing on a path already "
+                f"seen are measured once), plus one run with 2 threads. spread: per metric, the "
+                f"largest max-min over the paths of one seed. band: max({SAFETY_FACTOR} x spread, "
+                f"{FLOOR}; {COUNT_FLOOR} for counts), the allowed |fresh - recorded| for seed 0 on a "
+                f"platform other than the recording one."),
+        "measured_on": f"{here['cpu_model']}, {here['mkl']}, torch {here['torch']}",
+        "safety_factor": SAFETY_FACTOR,
+        "paths": runs,
+        "spread": {k: round(v, 6) for k, v in spread.items()},
+        "band": band,
+        "variants": variants,
+    }
+
+
+# --- what a fresh run is checked against, here ------------------------------------------------------
+def platform_differences(recorded: dict, here: dict) -> list[str]:
+    """The float-deciding fingerprint keys on which this host differs from meta.yaml's."""
+    return [f"{k}: recorded {recorded.get(k)!r}, here {here.get(k)!r}" for k in FLOAT_KEYS
+            if recorded.get(k) != here.get(k)]
+
+
+def comparison_line(meta: dict, here: dict | None = None) -> str:
+    """One line saying what tests/test_reproduce.py compares on this host, and why."""
+    rec, here = meta["platform"], here or platform_fingerprint()
+    diff = platform_differences(rec, here)
+    if not diff:
+        return (f"reproduce: platform matches meta.yaml ({rec['cpu_model']}, {rec['mkl']} path "
+                f"{rec['mkl_path']}, torch {rec['torch']} {rec['cpu_capability']}): seed 0 checked "
+                f"bit-exact")
+    return ("reproduce: platform differs from meta.yaml (" + "; ".join(diff) + "): seed 0 checked "
+            "against the lesson's invariants and the recorded tolerance bands, not bit for bit")
+
+
+def out_of_band(fresh: dict, meta: dict) -> list[str]:
+    """Headline metrics of ``fresh`` (a seed-0 run) farther from meta.yaml's seed 0 than the band."""
+    rec, band = meta["seeds"][0], meta["tolerance"]["band"]
+    return [f"{k}: fresh {fresh[k]}, recorded {rec[k]}, |diff| {abs(fresh[k] - rec[k]):.6f} > band "
+            f"{band[k]}" for k in HEADLINE if abs(fresh[k] - rec[k]) > band[k] + 1e-12]
+
+
 README = ROOT / "README.md"
 RESULTS_START, RESULTS_END = "<!-- results:start", "<!-- results:end -->"
 ROWS = [("imagined_return_per_step", "imagined reward/step (dream)", "+.3f"),
@@ -69,8 +216,12 @@ def render_results(meta: dict) -> str:
     """The README's results block, rendered from meta.yaml (never typed)."""
     seeds = list(meta["seeds"])
     page = meta["page"]
+    plat = meta["platform"]
+    where = (f"{plat['cpu_model']}, {plat['cpu_capability']}, {plat['mkl']} path {plat['mkl_path']}, "
+             f"torch {plat['torch']}" if "mkl_path" in plat else
+             f"{plat['cpu_capability']} CPU, torch {plat['torch']}")
     lines = [f"Default config, {meta['seeds'][seeds[0]]['eval_episodes']} held-out starts per seed "
-             f"({meta['platform']['cpu_capability']} CPU, torch {meta['platform']['torch']}):", "",
+             f"({where}):", "",
              "| measured | " + " | ".join(f"seed {s}" for s in seeds) + " | chapter page, seed 0 |",
              "| --- |" + " --- |" * (len(seeds) + 1)]
     for key, title, fmt in ROWS:
@@ -79,6 +230,13 @@ def render_results(meta: dict) -> str:
         ref = format(ref, fmt) if isinstance(ref, (int, float)) and not isinstance(ref, bool) else ref
         lines.append(f"| {title} | " + " | ".join(format(meta["seeds"][s][key], fmt) for s in seeds)
                      + f" | {ref} |")
+    if "tolerance" in meta:
+        band = meta["tolerance"]["band"]
+        lines += ["", "On another platform a fresh seed 0 should land within these bands of the seed-0 "
+                  f"column ({meta['tolerance']['safety_factor']}x the widest spread between float code "
+                  "paths measured here; `meta.yaml`, `tolerance`): "
+                  + ", ".join(f"{title} ±{int(band[key]) if fmt == 'd' else format(band[key], '.2g')}"
+                              for key, title, fmt in ROWS if key in band) + "."]
     lines += ["", "Imagination horizon sweep (Exercise 2):", "",
               "| run | gap | dream final distance (m) | real final distance (m) | real success |",
               "| --- | --- | --- | --- | --- |"]
@@ -94,13 +252,40 @@ def readme_with_results(meta: dict) -> str:
     return splice_readme(RESULTS_START, RESULTS_END, render_results(meta))
 
 
+def write_meta(record: dict, out: Path) -> None:
+    header = ("# Written by scripts/record_meta.py: measured, never edited by hand.\n"
+              "# 'page' holds the chapter page's own figures for comparison.\n")
+    out.write_text(header + yaml.safe_dump(record, sort_keys=False, width=100))
+    print(f"wrote {out}")
+    if out == ROOT / "meta.yaml":
+        README.write_text(readme_with_results(yaml.safe_load(out.read_text())))
+        print(f"updated the results in {README}")
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--out", type=Path, default=ROOT / "meta.yaml")
     p.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     p.add_argument("--sweep-seeds", type=int, nargs="+", default=[0, 1])
     p.add_argument("--horizons", type=int, nargs="+", default=[5, 30])
+    p.add_argument("--tolerance-only", action="store_true",
+                   help="re-measure only the tolerance section of an existing --out")
+    p.add_argument("--worker", type=int, nargs="+", help=argparse.SUPPRESS)
+    p.add_argument("--worker-threads", type=int, default=1, help=argparse.SUPPRESS)
+    p.add_argument("--probe", action="store_true", help=argparse.SUPPRESS)
     args = p.parse_args(argv)
+    if args.probe:
+        print(json.dumps(platform_fingerprint()))
+        return
+    if args.worker:
+        _worker(args.worker, args.worker_threads)
+        return
+    if args.tolerance_only:
+        record = yaml.safe_load(args.out.read_text())
+        print("tolerance bands, one fresh process per float code path:", flush=True)
+        record["tolerance"] = measure_tolerance()
+        write_meta(record, args.out)
+        return
 
     default = make_config()
     record = {"config": {k: v for k, v in default.to_dict().items() if k not in ("seed", "out")},
@@ -117,13 +302,9 @@ def main(argv=None):
             record["horizon_sweep"][f"seed{seed}_h{hz}"] = {k: res.metrics[k] for k in HEADLINE}
             print(f"seed {seed} horizon {hz}: gap {res.metrics['imagination_gap']:+.4f}", flush=True)
     record["acceptance"] = {seed: acceptance(m) for seed, m in record["seeds"].items()}
-    header = ("# Written by scripts/record_meta.py: measured, never edited by hand.\n"
-              "# 'page' holds the chapter page's own figures for comparison.\n")
-    args.out.write_text(header + yaml.safe_dump(record, sort_keys=False, width=100))
-    print(f"wrote {args.out}")
-    if args.out == ROOT / "meta.yaml":
-        README.write_text(readme_with_results(yaml.safe_load(args.out.read_text())))
-        print(f"updated the results in {README}")
+    print("tolerance bands, one fresh process per float code path:", flush=True)
+    record["tolerance"] = measure_tolerance()
+    write_meta(record, args.out)
 
 
 if __name__ == "__main__":

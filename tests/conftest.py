@@ -27,3 +27,21 @@ def executed_notebooks(tmp_path_factory):
             errors[path.name] = (f"{path.name}: cell {e.cell_index} (execution count {e.exec_count}) "
                                  f"raised {e.ename}: {e.evalue}")
     return out, errors
+
+
+def pytest_report_header(config):
+    """Say, at the top of every test run, what tests/test_reproduce.py compares seed 0 against here."""
+    try:
+        import yaml
+        from record_meta import comparison_line
+
+        return comparison_line(yaml.safe_load((ROOT / "meta.yaml").read_text()))
+    except Exception as e:                      # a broken meta.yaml fails its own tests, not the header
+        return f"reproduce: could not compare the platform with meta.yaml ({type(e).__name__}: {e})"
+
+
+def pytest_terminal_summary(terminalreporter, exitstatus, config):
+    """The same line at the end, where `pytest -q` (which drops the header) shows it too."""
+    if any(Path(str(item.fspath)).name == "test_reproduce.py" for item in terminalreporter.stats.get(
+            "passed", []) + terminalreporter.stats.get("failed", [])):
+        terminalreporter.write_line(pytest_report_header(config))
