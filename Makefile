@@ -14,9 +14,16 @@ STAMP  := $(VENV)/.installed
 
 export PATH := $(abspath $(VENV))/bin:$(PATH)
 
-.PHONY: setup chapter run test bench meta release grade lab clean
+.PHONY: setup sandbox chapter run test bench meta release grade lab clean
 
 setup: $(STAMP)
+
+# Grading confines student code with bubblewrap (Debian/Ubuntu package "bubblewrap"). Installed
+# here when we are root and it is missing; otherwise grading warns that code is not confined.
+sandbox:
+	@command -v bwrap >/dev/null 2>&1 || { [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1 \
+	  && (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq bubblewrap >/dev/null) ; } \
+	  || echo "note: bubblewrap is not installed (sudo apt-get install bubblewrap): grading cannot confine student code"
 
 $(STAMP): requirements.txt pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -30,7 +37,7 @@ chapter: setup
 run: setup
 	$(PY) -m pusht.dreamer --seed 0 --out runs/seed0
 
-test: setup
+test: setup sandbox
 	$(PY) -m pytest -q
 
 bench: setup
@@ -42,7 +49,7 @@ meta: setup
 release: setup
 	$(PY) scripts/release.py
 
-grade: setup
+grade: setup sandbox
 	@test -n "$(SUBMISSIONS)" || (echo "usage: make grade SUBMISSIONS=path/to/submissions.zip" && exit 2)
 	$(PY) autograde/grade.py "$(SUBMISSIONS)"
 

@@ -1,28 +1,32 @@
 """Grade a whole class in one command: LMS download -> scores, feedback HTML and a grades CSV.
 
-    python autograde/grade.py SUBMISSIONS [--course autograde] [--timeout 120]
+    python autograde/grade.py SUBMISSIONS [--course autograde] [--timeout 120] [--jobs N]
 
-SUBMISSIONS is a .zip as the LMS hands it over, or a folder. Each file is a student's downloaded
-notebook (from Jupyter or Colab), named ``<student_id>_<notebook>.ipynb`` (for example
-``s042_04_imagination_gap.ipynb``), or it lives at ``<student_id>/<notebook>.ipynb``.
+SUBMISSIONS is a .zip as the LMS hands it over, or a folder: each student's downloaded notebooks
+(Jupyter or Colab), named ``<student_id>_<notebook>.ipynb`` or placed in ``<student_id>/``
+folders (``intake.py`` says exactly what is accepted and what is refused).
 
-What happens, per student, and why no submission can stop the batch:
+Student code is untrusted. What happens, per student:
 
-1. the file is read as a notebook; if it is not one, the student scores 0 for it and the report
-   says what to re-upload (the rest of their work, and everyone else's, is graded as usual);
-2. Colab's extra metadata is removed; a locked test cell the student deleted is put back (nbgrader
-   already restores edited ones), so tests always run on the instructor's version;
-3. the prediction receipts printed in the student's own outputs are checked: the completion points
-   of Exercises 1 and 2 need the prediction locked BEFORE the experiment ran;
-4. ``nbgrader autograde`` executes everything in a fresh kernel (reduced config, a per-cell
-   timeout, errors recorded and execution continued), then the completion grades, the manual
-   grades from ``manual_grades.csv`` and the mark scheme are written into the gradebook;
-5. ``nbgrader generate_feedback`` writes one HTML page per notebook, and ``grades.csv`` plus
-   ``report.csv`` (what was wrong with each file) land in the course folder.
+1. ``intake.collect`` reads the download in memory (hostile names refused, nothing written
+   outside the course), normalises LMS ids and picks the newest of several uploads;
+2. ``repair``: each notebook is decoded (any common encoding), cleaned of Colab metadata, its
+   graded cells matched back to the instructor's (by id or content) and deleted test cells put
+   back; the prediction receipts are checked; the student's own cells are checked for calls to
+   the package's implementation of what they were asked to write (``checks.delegations``);
+3. the student is graded in a private copy of the course (in a temporary folder), one notebook at
+   a time by nbgrader, in a kernel confined by ``sandbox.py`` (bubblewrap: the student's own
+   working folder and nothing else of the course, no network, resource and wall-clock limits,
+   every process killed when the notebook is done). A failure in one notebook costs only that
+   notebook;
+4. the test cells' verdicts are made here, outside the kernel, from the raw numbers the kernel
+   recorded (``checks.judge``), so nothing the student's code does in the kernel can forge them;
+5. only this process writes the course's gradebook: every student's scores, completion points
+   and manual grades (``manual_grades.csv``), then the feedback pages (hidden tests removed,
+   outputs capped), ``grades.csv`` (nbgrader's export of that gradebook) and ``report.csv``.
 
-Grading again gives the same grades: manual grades live in the course folder's
-``manual_grades.csv`` (edit it or use ``python autograde/manual_grade.py``) and are re-applied
-after every run.
+Grading again gives the same grades: manual grades live in ``manual_grades.csv`` and are
+re-applied after every run.
 """
 
 from __future__ import annotations
@@ -31,12 +35,13 @@ import argparse
 import csv
 import json
 import os
-import re
 import shutil
+import signal
 import subprocess
 import sys
-import zipfile
-from datetime import datetime
+import tempfile
+import warnings
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import nbformat
@@ -44,16 +49,22 @@ import yaml
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
+sys.path.insert(0, str(HERE))
+
+import checks  # noqa: E402
+import intake  # noqa: E402
+import repair  # noqa: E402
+import sandbox  # noqa: E402
+
 COURSE = yaml.safe_load((ROOT / "course.yaml").read_text())
 ASSIGNMENT = COURSE["assignment"]
 COURSE_ID = "zero2robot-ch3.2"      # the same as in nbgrader_config.py
 NOTEBOOKS = sorted(p.name for p in (ROOT / "solutions").glob("*.ipynb"))
-NAME_RE = re.compile(r"^(?P<student>[A-Za-z0-9.-]+)_(?P<notebook>\d\d_[A-Za-z0-9_]+?)(?:[ (-]*\d*\)?)?\.ipynb$")
-LOCK_RE = re.compile(r"\[prediction locked\] (?P<ex>ex\d): \((?P<choice>[abc])\) at (?P<at>\S+)")
-RUN_RE = re.compile(r"\[experiment started\] (?P<ex>ex\d) at (?P<at>\S+) \(prediction locked at (?P<locked>\S+)\)")
-COLAB_KEYS = ("executionInfo", "colab", "outputId", "id")   # cell metadata Colab adds
 # The completion task cell of each predict-then-run exercise: "<ex>_order".
 EXERCISES = {"ex1": "04_imagination_gap", "ex2": "05_horizon"}
+FEEDBACK_OUTPUT_CHARS = 20_000      # per output in a feedback page; the rest is cut with a note
+FEEDBACK_NOTEBOOK_CHARS = 2_000_000  # all outputs of one notebook together
+HIDDEN_NOTE = "# (hidden tests: run by the grader; their verdict is printed below)\n"
 
 
 def tool_env() -> dict:
@@ -69,106 +80,6 @@ def nbgrader(course: Path, *args: str, timeout: int | None = None) -> subprocess
     return subprocess.run(cmd, cwd=course, capture_output=True, text=True, env=tool_env())
 
 
-# --- 1. collect -----------------------------------------------------------------------------------
-def collect(submissions: Path) -> tuple[dict[str, dict[str, bytes]], list[str]]:
-    """{student: {notebook file name: raw bytes}} and a list of files that could not be placed."""
-    files: dict[str, bytes] = {}
-    if submissions.suffix == ".zip":
-        with zipfile.ZipFile(submissions) as zf:
-            for info in zf.infolist():
-                if not info.is_dir():
-                    files[info.filename] = zf.read(info)
-    else:
-        for path in sorted(submissions.rglob("*")):
-            if path.is_file():
-                files[str(path.relative_to(submissions))] = path.read_bytes()
-    by_student: dict[str, dict[str, bytes]] = {}
-    unplaced = []
-    for name, data in sorted(files.items()):
-        parts = Path(name).parts
-        if len(parts) >= 2 and f"{Path(name).stem[:2]}".isdigit():
-            student, base = parts[-2], parts[-1]
-            notebook = Path(base).stem
-        else:
-            m = NAME_RE.match(Path(name).name)
-            if not m:
-                unplaced.append(f"{name}: name does not look like <student_id>_<notebook>.ipynb")
-                continue
-            student, notebook = m["student"], m["notebook"]
-        match = [nb for nb in NOTEBOOKS if nb.startswith(notebook[:2] + "_")]
-        if not match:
-            unplaced.append(f"{name}: no notebook {notebook!r} in this assignment")
-            continue
-        by_student.setdefault(student, {})[match[0]] = data
-    return by_student, unplaced
-
-
-# --- 2. clean and repair ---------------------------------------------------------------------------
-def read_notebook(data: bytes):
-    """The notebook, or raise ValueError saying why it is not one."""
-    try:
-        nb = nbformat.reads(data.decode("utf-8"), as_version=4)
-    except Exception as e:   # JSON, encoding or schema problems all mean "not a notebook"
-        raise ValueError(f"not a valid notebook file ({type(e).__name__}: {str(e)[:120]})") from None
-    return nb
-
-
-def clean_colab(nb) -> bool:
-    """Drop the metadata Colab adds; True if there was any."""
-    found = False
-    for key in ("colab", "accelerator", "gpuClass"):
-        found |= nb.metadata.pop(key, None) is not None
-    nb.metadata.setdefault("kernelspec", {"display_name": "Python 3", "language": "python", "name": "python3"})
-    for cell in nb.cells:
-        for key in COLAB_KEYS[:3]:
-            found |= cell.metadata.pop(key, None) is not None
-    return found
-
-
-def restore_locked_cells(nb, release) -> list[str]:
-    """Put back locked graded cells the student deleted, after the cell that precedes them in the
-    release. Returns the grade ids restored."""
-    def gid(cell):
-        return cell.metadata.get("nbgrader", {}).get("grade_id")
-
-    present = {gid(c) for c in nb.cells if gid(c)}
-    restored = []
-    for i, cell in enumerate(release.cells):
-        meta = cell.metadata.get("nbgrader", {})
-        if meta.get("locked") and meta.get("grade") and gid(cell) not in present:
-            prev = {gid(c) or c.get("id") for c in release.cells[:i]}
-            pos = max([j + 1 for j, c in enumerate(nb.cells) if (gid(c) or c.get("id")) in prev], default=len(nb.cells))
-            nb.cells.insert(pos, nbformat.from_dict(json.loads(json.dumps(cell))))
-            present.add(gid(cell))
-            restored.append(gid(cell))
-    return restored
-
-
-# --- 3. receipts -----------------------------------------------------------------------------------
-def receipt_verdict(nb, exercise: str) -> tuple[bool, str]:
-    """Did the student's own outputs show the prediction locked before the experiment ran?"""
-    text = "\n".join(o.get("text", "") if isinstance(o.get("text"), str) else "".join(o.get("text", []))
-                     for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", []))
-    locks = [m for m in LOCK_RE.finditer(text) if m["ex"] == exercise]
-    runs = [m for m in RUN_RE.finditer(text) if m["ex"] == exercise]
-    if not runs:
-        return False, f"{exercise}: no experiment receipt in your notebook (run the experiment cell)"
-    if not locks and "already locked" not in text:
-        return False, f"{exercise}: no prediction receipt in your notebook (run the lock cell)"
-    run = runs[0]
-    try:
-        started, locked = datetime.fromisoformat(run["at"]), datetime.fromisoformat(run["locked"])
-    except ValueError:
-        return False, f"{exercise}: the receipts are unreadable (were they edited?)"
-    lock_times = {m["at"] for m in locks}
-    if locks and run["locked"] not in lock_times and "already locked" not in text:
-        return False, f"{exercise}: the experiment used a prediction that this notebook never locked"
-    if f"[warning] {exercise}: the experiment already ran" in text or locked >= started:
-        return False, f"{exercise}: the experiment ran before the prediction was locked"
-    return True, f"{exercise}: prediction locked at {run['locked']}, experiment ran at {run['at']}: in order"
-
-
-# --- the whole batch -------------------------------------------------------------------------------
 def prepare_course(course: Path) -> None:
     """Copy solutions/ into the course's source folder and (re)generate the assignment."""
     src = course / "source" / ASSIGNMENT
@@ -182,115 +93,345 @@ def prepare_course(course: Path) -> None:
         sys.exit(f"nbgrader generate_assignment failed:\n{proc.stderr[-3000:]}")
 
 
-def autograde(course: Path, students: list[str], timeout: int, jobs: int, log=print) -> None:
-    """``nbgrader autograde`` each student, ``jobs`` at a time (one process per student).
+# --- per student: repair, then grade in a private course ----------------------------------------
+def prepare_student(uploads: dict, release: dict) -> tuple[dict, list[str], dict, dict]:
+    """(repaired notebooks by file name, notes, completion verdicts, delegations by test id)."""
+    notebooks, notes, completion, delegated = {}, [], {}, {}
+    for name, up in sorted(uploads.items()):
+        try:
+            nb = intake.decode_notebook(up.data)
+        except ValueError as e:
+            notes.append(f"{name}: {e}; it scores 0")
+            continue
+        if repair.clean_colab(nb):
+            notes.append(f"{name}: saved by Colab; its extra metadata was removed")
+        notes += [f"{name}: {n}" for n in repair.match_cells(nb, release[name])]
+        for g in repair.restore_locked_cells(nb, release[name]):
+            notes.append(f"{name}: the locked test cell '{g}' was missing and was put back; never delete test cells")
+        for ex, stem in EXERCISES.items():
+            if name.startswith(stem):
+                completion[ex] = repair.receipt_verdict(nb, ex)
+        release_sources = {repair.source(c) for c in release[name].cells}
+        locked = {repair.gid(c) for c in release[name].cells
+                  if c.metadata.get("nbgrader", {}).get("locked")}
+        for test in checks.TESTS.values():
+            if name.startswith(test.notebook):
+                found = checks.delegations(test, nb.cells, release_sources, locked)
+                if found:
+                    delegated[test.test_id] = found
+        notebooks[name] = nb
+    return notebooks, notes, completion, delegated
 
-    A student whose run fails (for example when both processes write the gradebook at once) is
-    retried alone, so a failure can only cost time, never a grade.
-    """
-    from concurrent.futures import ThreadPoolExecutor
 
-    def one(student):
-        return student, nbgrader(course, "autograde", ASSIGNMENT, "--force", f"--student={student}",
-                                 timeout=timeout)
+def private_course(course: Path, student: str, notebooks: dict, work: Path) -> Path:
+    """A copy of the course with only this student in it; the kernel sees none of it but its folder."""
+    priv = work / "course"
+    priv.mkdir(parents=True)
+    shutil.copy(course / "nbgrader_config.py", priv / "nbgrader_config.py")
+    shutil.copytree(course / "source", priv / "source")
+    shutil.copytree(course / "release", priv / "release")
+    shutil.copy(course / "gradebook.template.db", priv / "gradebook.db")
+    dest = priv / "submitted" / student / ASSIGNMENT
+    dest.mkdir(parents=True)
+    for name, nb in notebooks.items():
+        nbformat.write(nb, dest / name)
+    (dest / "timestamp.txt").write_text("2026-01-01 00:00:00.000000 UTC")   # fixed: regrades match
+    return priv
 
-    with ThreadPoolExecutor(max(1, jobs)) as pool:
-        failed = [s for s, proc in pool.map(one, students) if proc.returncode != 0]
-    for student in failed:
-        _, proc = one(student)
-        if proc.returncode != 0:
-            log(f"nbgrader autograde failed for {student} (the others are graded):\n{proc.stderr[-1500:]}")
 
-
-def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs: int = 2,
-                log=print) -> dict:
-    """Grade every submission in ``submissions``; returns the per-student report."""
-    course = course.resolve()
-    prepare_course(course)
-    by_student, unplaced = collect(submissions)
-    for line in unplaced:
-        log(f"skipped {line}")
-    release = {name: nbformat.read(course / "release" / ASSIGNMENT / name, as_version=4)
-               for name in NOTEBOOKS}
-    report = {s: {"notes": [], "completion": {}} for s in by_student}
-
+def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | None, limits: dict) -> dict:
+    """Autograde every notebook of one student in the private course ``priv`` (runs in its own
+    process). Returns {notebook: {"ok", "error", "scores": {grade_id: auto score}, "verdicts"}}."""
     from nbgrader.api import Gradebook
+    from nbgrader.apps import NbGraderAPI
+    from nbgrader.coursedir import CourseDirectory
+    from traitlets.config import PyFileConfigLoader
 
-    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
-        for student in by_student:
-            gb.update_or_create_student(student)
-    for student, notebooks in by_student.items():
-        dest = course / "submitted" / student / ASSIGNMENT
+    run = priv.parent / "run"
+    grading, sockets, runtime = run / "grading", run / "sockets", run / "runtime"
+    for p in (grading / "cases", sockets, runtime):
+        p.mkdir(parents=True, exist_ok=True)
+    for test in checks.TESTS.values():
+        (grading / "cases" / f"{test.test_id}.json").write_text(json.dumps([c.spec for c in test.cases]))
+    os.environ["JUPYTER_RUNTIME_DIR"] = str(runtime)
+    os.environ["NBGRADER_EXECUTION"] = "autograde"
+    config = PyFileConfigLoader("nbgrader_config.py", path=str(priv)).load_config()
+    config.CourseDirectory.root = str(priv)
+    config.CourseDirectory.db_url = f"sqlite:///{priv / 'gradebook.db'}"
+    config.Execute.timeout = timeout
+    config.KernelManager.transport = "ipc"
+    config.KernelManager.ip = str(sockets / "k")
+    if confine:
+        sandbox.write_kernelspec(run / "jupyter", {"socket_dir": str(sockets), "grading_dir": str(grading),
+                                                   "uid": uid, "limits": limits})
+        os.environ["JUPYTER_PATH"] = str(run / "jupyter")
+        config.Execute.kernel_name = sandbox.KERNEL_NAME
+    else:
+        os.environ["PUSHT_GRADING_DIR"] = str(grading)
+    out = {}
+    for name in [p.name for p in sorted((priv / "submitted" / student / ASSIGNMENT).glob("*.ipynb"))]:
+        nb_id = name[:-len(".ipynb")]
+        shutil.rmtree(grading / "results", ignore_errors=True)
+        (grading / "results").mkdir()
+        coursedir = CourseDirectory(config=config)
+        coursedir.notebook_id = nb_id
+        api = NbGraderAPI(coursedir=coursedir, config=config)
+        res = api.autograde(ASSIGNMENT, student, force=True, create=True)
+        entry = {"ok": bool(res.get("success")), "error": "" if res.get("success") else
+                 _last_error(res.get("error", "") or res.get("log", "")), "scores": {}, "verdicts": {}}
+        if entry["ok"]:
+            with Gradebook(config.CourseDirectory.db_url, course_id=COURSE_ID) as gb:
+                sub = gb.find_submission_notebook(nb_id, ASSIGNMENT, student)
+                entry["scores"] = {g.name: g.auto_score for g in sub.grades}
+        for test in checks.TESTS.values():
+            if name.startswith(test.notebook):
+                entry["verdicts"][test.test_id] = str(grading / "results" / f"{test.test_id}.npz")
+        # judged here, in the worker, which the kernel cannot reach (the verdicts need the files)
+        for tid, path in entry["verdicts"].items():
+            entry["verdicts"][tid] = vars(checks.judge(checks.TESTS[tid], path, 0.0))
+        out[name] = entry
+    return out
+
+
+def _last_error(text: str) -> str:
+    lines = [l for l in text.strip().splitlines() if l.strip()]
+    for l in reversed(lines):
+        if "Error" in l or "error" in l:
+            return l.strip()[:300]
+    return (lines[-1] if lines else "nbgrader failed")[:300]
+
+
+def grade_student(course: Path, student: str, notebooks: dict, timeout: int, confine: bool,
+                  index: int, limits: dict) -> dict:
+    """Run the worker for one student in a subprocess; copy its autograded notebooks back."""
+    work = Path(tempfile.mkdtemp(prefix="pusht-grade-"))
+    os.chmod(work, 0o755)
+    try:
+        priv = private_course(course, student, notebooks, work)
+        args = {"priv": str(priv), "student": student, "timeout": timeout, "confine": confine,
+                "uid": sandbox.student_uid(index) if confine else None, "limits": limits}
+        proc = subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "--worker", json.dumps(args)],
+                                cwd=priv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                env=tool_env(), start_new_session=True)
+        budget = limits["wall_seconds"] * max(1, len(notebooks)) + 120
+        try:
+            stdout, stderr = proc.communicate(timeout=budget)
+        except subprocess.TimeoutExpired:
+            stdout, stderr = "", "the grading of this student ran out of time"
+        finally:
+            try:
+                os.killpg(proc.pid, signal.SIGKILL)   # nothing this student started outlives grading
+            except ProcessLookupError:
+                pass
+            proc.wait()
+        line = next((l for l in reversed(stdout.splitlines()) if l.startswith("{")), None)
+        result = json.loads(line) if line else {}
+        if not result:
+            result = {name: {"ok": False, "error": _last_error(stderr), "scores": {}, "verdicts": {}}
+                      for name in notebooks}
+        src = priv / "autograded" / student / ASSIGNMENT
+        dest = course / "autograded" / student / ASSIGNMENT
         shutil.rmtree(dest, ignore_errors=True)
         dest.mkdir(parents=True)
-        for name, data in notebooks.items():
-            try:
-                nb = read_notebook(data)
-            except ValueError as e:
-                report[student]["notes"].append(f"{name}: {e}; it scores 0. Re-upload it "
-                                                f"(Jupyter/Colab: File > Download > .ipynb).")
-                continue
-            if clean_colab(nb):
-                report[student]["notes"].append(f"{name}: saved by Colab; its extra metadata was removed")
-            for gid in restore_locked_cells(nb, release[name]):
-                report[student]["notes"].append(f"{name}: the locked test cell '{gid}' was missing and "
-                                                f"was put back; never delete test cells")
-            for ex, nb_stem in EXERCISES.items():
-                if name.startswith(nb_stem):
-                    report[student]["completion"][ex] = receipt_verdict(nb, ex)
-            nbformat.write(nb, dest / name)
-        (dest / "timestamp.txt").write_text("2026-01-01 00:00:00.000000 UTC")   # fixed: regrades match
+        for name in notebooks:
+            if (src / name).exists():
+                shutil.copy(src / name, dest / name)
+        return result
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
 
-    autograde(course, [s for s in by_student if any((course / "submitted" / s / ASSIGNMENT).glob("*.ipynb"))],
-              timeout, jobs, log)
-    apply_grades(course, report)
+
+# --- the whole batch ---------------------------------------------------------------------------
+def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs: int | None = None,
+                log=print, confine: bool | None = None, limits: dict | None = None,
+                progress: bool = True) -> dict:
+    """Grade every submission in ``submissions``; returns the per-student report."""
+    from nbgrader.api import Gradebook
+
+    course = course.resolve()
+    limits = {**sandbox.DEFAULT_LIMITS, **(limits or {})}
+    ok, why = sandbox.available()
+    if confine is None:
+        confine = ok
+    if confine and not ok:
+        raise RuntimeError(f"confined grading was asked for, but {why}")
+    if not confine:
+        msg = (f"WARNING: submissions are NOT confined ({why or 'confinement switched off'}): "
+               f"student code runs as you, with your files in reach. Install bubblewrap to confine it.")
+        log(msg)
+        warnings.warn(msg)
+    prepare_course(course)
+    shutil.copy(course / "gradebook.db", course / "gradebook.template.db")
+    got = intake.collect(submissions, NOTEBOOKS)
+    for line in got.rejected:
+        log(f"skipped {line}")
+    release = {name: nbformat.read(course / "release" / ASSIGNMENT / name, as_version=4) for name in NOTEBOOKS}
+    report = {s: {"notes": list(got.notes.get(s, [])), "completion": {}, "verdicts": {}, "failed": {}}
+              for s in got.students}
+    prepared = {}
+    for s, uploads in got.students.items():
+        nbs, notes, completion, delegated = prepare_student(uploads, release)
+        report[s]["notes"] += notes
+        report[s]["completion"] = completion
+        report[s]["delegated"] = delegated
+        prepared[s] = nbs
+    jobs = jobs or max(1, (os.cpu_count() or 2))
+    order = sorted(prepared)
+    from concurrent.futures import as_completed
+
+    from tqdm.auto import tqdm
+
+    results = {}
+    with ThreadPoolExecutor(jobs) as pool:
+        futures = {pool.submit(grade_student, course, s, prepared[s], timeout, confine, i, limits): s
+                   for i, s in enumerate(order) if prepared[s]}
+        with tqdm(total=len(futures), desc=f"grading ({jobs} at a time)", unit="student",
+                  disable=not progress) as bar:
+            for f in as_completed(futures):
+                results[futures[f]] = f.result()
+                bar.set_postfix_str(futures[f][:20])
+                bar.update()
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
+        for s in report:
+            gb.update_or_create_student(s)
+            try:
+                gb.remove_submission(ASSIGNMENT, s)
+            except Exception:
+                pass
+        gb.db.commit()
+    record(course, report, results)
+    sanitize_feedback_sources(course, report)
     nbgrader(course, "generate_feedback", ASSIGNMENT, "--force")
-    export(course, report)
+    export(course, report, got.rejected)
     return report
 
 
-def apply_grades(course: Path, report: dict) -> None:
-    """Completion grades from the receipts, then manual grades and the mark scheme."""
+def record(course: Path, report: dict, results: dict) -> None:
+    """Write every student's scores into the course gradebook (this process is its only writer)."""
     from nbgrader.api import Gradebook, MissingEntry
 
     scheme = yaml.safe_load((HERE / "mark_scheme.yaml").read_text()) if (HERE / "mark_scheme.yaml").exists() else {}
-    manual = {}
-    if (course / "manual_grades.csv").exists():
-        with open(course / "manual_grades.csv", newline="") as f:
-            for row in csv.DictReader(f):
-                manual[(row["student_id"], row["notebook"], row["grade_id"])] = row
+    manual = read_manual(course)
     with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
         for student, rep in report.items():
-            for name in NOTEBOOKS:
+            res = results.get(student, {})
+            if not res:
+                continue
+            gb.add_submission(ASSIGNMENT, student, timestamp="2026-01-01 00:00:00.000000 UTC")
+            for name, entry in res.items():
                 nb_id = name[:-len(".ipynb")]
-                try:
-                    sub = gb.find_submission_notebook(nb_id, ASSIGNMENT, student)
-                except MissingEntry:
-                    continue
+                if not entry["ok"]:
+                    rep["failed"][name] = entry["error"]
+                    rep["notes"].append(f"{name}: nbgrader could not finish this notebook ({entry['error']}); "
+                                        f"points from the tests that had already run are kept")
+                sub = gb.find_submission_notebook(nb_id, ASSIGNMENT, student)
                 for grade in sub.grades:
-                    gid, comment_text = grade.name, None
-                    ex = gid[:-len("_order")] if gid.endswith("_order") else None
+                    g = grade.name
+                    comment = None
+                    if g in entry["scores"] and entry["scores"][g] is not None:
+                        grade.auto_score = entry["scores"][g]
+                    if g in entry["verdicts"]:
+                        v = entry["verdicts"][g]
+                        found = rep["delegated"].get(g)
+                        if found:
+                            v = vars(checks.judge(checks.TESTS[g], "", 0.0, delegation=found))
+                        grade.manual_score = grade.max_score if v["message"].startswith("all ") else 0.0
+                        grade.needs_manual_grade = False
+                        rep["verdicts"][g] = (grade.manual_score, grade.max_score, v["message"])
+                    ex = g[:-len("_order")] if g.endswith("_order") else None
                     if ex in rep["completion"]:
                         ok, why = rep["completion"][ex]
                         grade.manual_score = grade.max_score if ok else 0.0
-                        comment_text = why
-                    elif gid in scheme:
-                        comment_text = f"Mark scheme: {scheme[gid]}"
-                    row = manual.get((student, nb_id, gid))
+                        grade.needs_manual_grade = False
+                        comment = why
+                    elif g in scheme:
+                        comment = f"Mark scheme: {scheme[g]}"
+                    row = manual.get((student, nb_id, g))
                     if row:
-                        grade.manual_score = float(row["score"])
-                        comment_text = (row.get("comment") or "") + (f"\n\n{comment_text}" if comment_text else "")
-                    if comment_text is not None:
                         try:
-                            c = gb.find_comment(gid, nb_id, ASSIGNMENT, student)
-                            c.manual_comment = comment_text
+                            score = float(row["score"])
+                        except ValueError:
+                            score = float("nan")
+                        if 0 <= score <= grade.max_score:
+                            grade.manual_score = score
+                            grade.needs_manual_grade = False
+                            comment = (row.get("comment") or "") + (f"\n\n{comment}" if comment else "")
+                        else:
+                            rep["notes"].append(f"manual grade {row['score']!r} for {nb_id} {g} refused: "
+                                                f"outside 0..{grade.max_score}")
+                    if comment is not None:
+                        try:
+                            gb.find_comment(g, nb_id, ASSIGNMENT, student).manual_comment = comment
                         except MissingEntry:
                             pass
             gb.db.commit()
 
 
-def export(course: Path, report: dict) -> None:
-    """grades.csv (nbgrader's export) and report.csv (what happened to each file)."""
+def read_manual(course: Path) -> dict:
+    manual = {}
+    if (course / "manual_grades.csv").exists():
+        with open(course / "manual_grades.csv", newline="") as f:
+            for row in csv.DictReader(f):
+                manual[(row["student_id"], row["notebook"], row["grade_id"])] = row
+    return manual
+
+
+def sanitize_feedback_sources(course: Path, report: dict) -> None:
+    """Before feedback: hidden tests out, each test's verdict in, long outputs cut."""
+    for student, rep in report.items():
+        folder = course / "autograded" / student / ASSIGNMENT
+        for path in folder.glob("*.ipynb"):
+            nb = nbformat.read(path, as_version=4)
+            budget = FEEDBACK_NOTEBOOK_CHARS
+            for cell in nb.cells:
+                g = repair.gid(cell)
+                if cell.cell_type == "code" and "### BEGIN HIDDEN TESTS" in cell.source:
+                    cell.source = _strip_hidden(cell.source)
+                if g in rep["verdicts"]:
+                    score, max_score, msg = rep["verdicts"][g]
+                    cell.outputs = [o for o in cell.get("outputs", []) if not
+                                    (o.get("output_type") == "stream" and "[graded outside this kernel]" in o.get("text", ""))]
+                    cell.outputs.append(nbformat.v4.new_output("stream", name="stdout",
+                                        text=f"[grader] {g}: {score:g} of {max_score:g} points: {msg}\n"))
+                if cell.cell_type == "code":
+                    budget = _cap_outputs(cell, budget)
+            nbformat.write(nb, path)
+
+
+def _strip_hidden(src: str) -> str:
+    out, hidden = [], False
+    for line in src.splitlines(keepends=True):
+        if line.strip() == "### BEGIN HIDDEN TESTS":
+            hidden = True
+            out.append(HIDDEN_NOTE)
+        elif line.strip() == "### END HIDDEN TESTS":
+            hidden = False
+        elif not hidden:
+            out.append(line)
+    return "".join(out)
+
+
+def _cap_outputs(cell, budget: int) -> int:
+    kept = []
+    for o in cell.get("outputs", []):
+        for key in ("text",):
+            if isinstance(o.get(key), str) and len(o[key]) > FEEDBACK_OUTPUT_CHARS:
+                o[key] = o[key][:FEEDBACK_OUTPUT_CHARS] + f"\n[... output cut at {FEEDBACK_OUTPUT_CHARS} characters]\n"
+        if o.get("output_type") == "error":
+            o["traceback"] = [t[:FEEDBACK_OUTPUT_CHARS] for t in o.get("traceback", [])[:50]]
+        size = len(json.dumps(o))
+        if size > budget:
+            kept.append(nbformat.v4.new_output("stream", name="stdout",
+                                               text="[... further output removed: the page is capped in size]\n"))
+            break
+        budget -= size
+        kept.append(o)
+    cell.outputs = kept
+    return budget
+
+
+def export(course: Path, report: dict, rejected: list[str] = ()) -> None:
+    """grades.csv (nbgrader's export of the gradebook) and report.csv (what happened to each file)."""
     nbgrader(course, "export", f"--CsvExportPlugin.filename={course / 'grades.csv'}")
     from nbgrader.api import Gradebook, MissingEntry
 
@@ -304,20 +445,33 @@ def export(course: Path, report: dict) -> None:
                 score, max_score = sub.score, sub.max_score
             except MissingEntry:
                 score, max_score = 0.0, gb.find_assignment(ASSIGNMENT).max_score
-            notes = report[student]["notes"] + [why for _, why in report[student]["completion"].values()]
+            rep = report[student]
+            notes = rep["notes"] + [why for _, why in rep["completion"].values()]
+            notes += [f"{g}: {s:g}/{m:g}: {msg}" for g, (s, m, msg) in sorted(rep["verdicts"].items())]
             w.writerow([student, round(score, 3), round(max_score, 3), " | ".join(notes)])
+        for line in rejected:          # files that could not be placed to any student
+            w.writerow(["(not graded)", "", "", line])
 
 
 def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["--worker"]:
+        a = json.loads(argv[1])
+        out = worker(Path(a["priv"]), a["student"], a["timeout"], a["confine"], a["uid"], a["limits"])
+        print(json.dumps(out))
+        return 0
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("submissions", type=Path, help="a .zip from the LMS, or a folder of notebooks")
     p.add_argument("--course", type=Path, default=HERE, help="nbgrader course folder (default: autograde/)")
     p.add_argument("--timeout", type=int, default=120, help="seconds per cell before it is interrupted")
-    p.add_argument("--jobs", type=int, default=2, help="students graded at once (one per core)")
+    p.add_argument("--jobs", type=int, default=None, help="students graded at once (default: one per core)")
+    p.add_argument("--no-confine", action="store_true",
+                   help="run student code unconfined (only for trusted notebooks; prints a warning)")
     args = p.parse_args(argv)
     if not args.submissions.exists():
         p.error(f"{args.submissions} does not exist")
-    report = grade_class(args.submissions, args.course, args.timeout, args.jobs)
+    report = grade_class(args.submissions, args.course, args.timeout, args.jobs,
+                         confine=False if args.no_confine else None)
     print(f"graded {len(report)} students: scores in {args.course / 'grades.csv'}, per-file notes in "
           f"{args.course / 'report.csv'}, feedback in {args.course / 'feedback'}/")
     return 0

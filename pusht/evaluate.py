@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
+from .grading import reference
 from .env import PUSHER_RADIUS, PushTEnv, distance_to_tee, obs_to_pose
 from .reward import reward_from_obs
 
@@ -61,6 +62,7 @@ def _to_np(x):
     return x.detach().cpu().numpy().astype(np.float64)
 
 
+@reference("04_imagination_gap: dream")
 def dream(wm, policy, norm_obs0: torch.Tensor, horizon: int):
     """The imagined half of the evaluation, in the model's own (normalised) units.
 

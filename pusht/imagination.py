@@ -17,9 +17,11 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
+from .grading import reference
 from .reward import reward_from_obs
 
 
+@reference("03_imagination_actor: lambda_return")
 def lambda_return(rewards: torch.Tensor, values: torch.Tensor, gamma: float, lam: float) -> torch.Tensor:
     """Dreamer's lambda-return, computed backwards from the horizon.
 

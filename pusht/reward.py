@@ -11,9 +11,11 @@ from __future__ import annotations
 
 import torch
 
+from .grading import reference
 from .env import ANG_SCALE, POS_SCALE
 
 
+@reference("02_reward: reward_from_obs")
 def reward_from_obs(norm_obs: torch.Tensor, mean: torch.Tensor, std: torch.Tensor):
     """Shaped PushT reward of normalised observations (any leading shape, last dim 6).
 

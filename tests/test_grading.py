@@ -90,7 +90,9 @@ def test_wrong_implementation_fails_its_tests_with_feedback(graded):
     course, _, _ = graded
     assert cell_scores(course, "wrong", "02_reward")["reward_impl_tests"] == 0
     feedback = (course / "feedback" / "wrong" / grade.ASSIGNMENT / "02_reward.html").read_text()
-    assert "AssertionError" in feedback
+    assert "[grader] reward_impl_tests: 0 of 4 points" in feedback and "first failure" in feedback
+    # the verdict and its hint reach the student; the hidden tests' source does not
+    assert "BEGIN HIDDEN TESTS" not in feedback and "grading.submit" not in feedback
 
 
 def test_a_notebook_that_raises_is_graded_not_fatal(graded):
@@ -137,7 +139,11 @@ def test_regrading_gives_the_same_grades_and_keeps_manual_grades(graded):
     set_manual_grade("perfect", "04_imagination_gap", "ex1_sentence", 1.0, "Clear and complete.",
                      course=course)
     before = grades_csv(course)
-    grade.grade_class(subs, course, timeout=TIMEOUT, log=print)
+    with open(course / "manual_grades.csv", "a", newline="") as f:       # a hand edit out of range
+        csv.writer(f).writerow(["perfect", "05_horizon", "ex2_sentence", "7", "too generous"])
+    report = grade.grade_class(subs, course, timeout=TIMEOUT, log=print)
     after = grades_csv(course)
     assert after == before
     assert cell_scores(course, "perfect", "04_imagination_gap")["ex1_sentence"] == 1.0
+    assert cell_scores(course, "perfect", "05_horizon")["ex2_sentence"] in (None, 0)
+    assert any("refused" in n and "ex2_sentence" in n for n in report["perfect"]["notes"])

@@ -1,0 +1,242 @@
+"""The hidden tests, judged outside the student's kernel.
+
+Each graded test cell ends, while grading, in ``pusht.grading.submit(TEST_ID, student_function)``:
+the kernel runs the probe cases below on the student's function and saves the raw numbers. This
+module, run by the grader's own process, runs the same probes on the package's reference
+implementation and compares. A test earns its points only if every case matches; the feedback
+names the first case that did not, with a hint, but never shows this file.
+
+The static check (``delegations``) reads the student's own cells: a submission that calls the
+package's implementation of the function it was asked to write earns no credit for it.
+"""
+
+from __future__ import annotations
+
+import ast
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+Z6, ONE6 = {"t": [0.0] * 6}, {"t": [1.0] * 6}          # mean 0, std 1: normalised = metres
+ODD_MEAN = {"rand": [6], "seed": 11, "lo": -0.5, "hi": 0.5}
+ODD_STD = {"rand": [6], "seed": 12, "lo": 0.2, "hi": 1.2}
+
+
+def _obs(*rows):
+    return {"t": [list(r) for r in rows]}
+
+
+def _yaw_rows():
+    return [[0.0, 0.0, 0.0, 0.0, s * math.sin(y), s * math.cos(y)]
+            for y in (0.3, 2.0, -2.5, 3.0, 1.5 * math.pi) for s in (0.5, 1.0, 1.7)]
+
+
+@dataclass
+class Case:
+    spec: dict                 # what pusht.grading.probe runs
+    hint: str                  # what the student reads when it fails
+    atol: float = 1e-5
+
+
+@dataclass
+class Test:
+    test_id: str
+    notebook: str              # file stem
+    function: str              # the name the student defines
+    reference: str             # "module:function" of the package's implementation
+    cases: list[Case] = field(default_factory=list)
+
+
+def _call(*args):
+    return {"kind": "call", "args": list(args)}
+
+
+REWARD = Test("reward_impl_tests", "02_reward", "reward_from_obs", "pusht.reward:reward_from_obs", [
+    Case(_call(_obs([0.3, -0.2, 0.0, 0.0, 0.0, 1.0]), Z6, ONE6),
+         "the T on the target should score 0 (pos_err 0, ang_err 0), wherever the pusher is"),
+    Case(_call(_obs([0.0, 0.0, 0.3, 0.4, 0.0, 1.0], [0.0, 0.0, 0.0, 0.0, 1.0, 0.0]), Z6, ONE6),
+         "known poses: (0.3, 0.4) m away scores -0.5; a quarter turn on the target scores -0.25"),
+    Case(_call({"randn": [3, 5, 6], "seed": 1, "fresh": True}, {"t": [0.01, -0.02, 0.03, 0.0, 0.1, 0.2]},
+               {"t": [0.2, 0.2, 0.15, 0.15, 0.7, 0.7]}),
+         "random normalised observations (3, 5, 6): de-normalise with obs = norm_obs * std + mean"),
+    Case(_call({"t": _yaw_rows()}, Z6, ONE6),
+         "the yaw must come from atan2(sin, cos) on both components (decoded pairs need not lie on "
+         "the unit circle), and angles wrap: 3*pi/2 is a quarter turn"),
+    Case(_call(_obs([0.0, 0.0, 0.0, 0.0, 0.0, -1.0], [0.0, 0.0, 0.1, 0.0, 0.0, 1.3]), Z6, ONE6),
+         "a half turn scores -0.5; a decoded cos above 1 must not give NaN"),
+    Case(_call(_obs([0.4, 0.4, 0.1, -0.2, 0.6, 0.8], [-0.3, 0.1, 0.1, -0.2, 0.6, 0.8]), Z6, ONE6),
+         "only the T's pose (dims 2-5) enters the reward, not the pusher"),
+    Case(_call({"randn": [6], "seed": 3, "fresh": True}, ODD_MEAN, ODD_STD),
+         "a single observation (6,) gives scalars; use the mean and std you are given"),
+    Case(_call({"randn": [2, 3, 4, 6], "seed": 4, "fresh": True}, ODD_MEAN, ODD_STD),
+         "any leading shape (2, 3, 4, 6) gives results of shape (2, 3, 4)"),
+    Case({"kind": "grad", "of": 0, "args": [{"randn": [7, 6], "seed": 5, "fresh": True, "grad": True},
+                                           ODD_MEAN, ODD_STD]},
+         "the reward must be differentiable in norm_obs, with the right gradient (none on the pusher)"),
+])
+
+_HV = ({"randn": [6, 3], "seed": 21, "fresh": True}, {"randn": [7, 3], "seed": 22, "fresh": True})
+LAMBDA = Test("lambda_return_impl_tests", "03_imagination_actor", "lambda_return",
+              "pusht.imagination:lambda_return", [
+    Case(_call({"t": [[1.0], [2.0]]}, {"t": [[10.0], [20.0], [30.0]]}, 0.5, 0.5),
+         "the hand-worked case: rewards [1, 2], values [10, 20, 30], gamma = lam = 0.5 gives [[10.25], [17]]"),
+    Case(_call({"randn": [15, 64], "seed": 23, "fresh": True}, {"randn": [16, 64], "seed": 24, "fresh": True},
+               0.99, 0.95), "the training's shapes (H, B) = (15, 64) with the chapter's gamma and lam"),
+    Case(_call(*_HV, 0.9, 0.0), "with lam = 0 the return is r_t + gamma * V_{t+1}"),
+    Case(_call(*_HV, 0.9, 1.0), "with lam = 1 it is the discounted reward sum plus gamma^(H-t) * V_H"),
+    Case(_call(*_HV, 0.7, 0.3), "use the gamma and lam arguments, not the config's values"),
+    Case(_call(*_HV, 1.0, 0.8), "use the gamma and lam arguments (gamma = 1 too)"),
+    Case(_call({"t": [[0.0]] * 6}, {"t": [[0.0]] * 6 + [[1.0]]}, 0.9, 0.5),
+         "the critic's value of the LAST state V_H closes the recursion (G_H = V_H)"),
+    Case(_call(_HV[0], {"t": [[100.0, -50.0, 7.0]] + [[0.5, -0.5, 0.25]] * 6}, 0.9, 0.7),
+         "G_t uses V_{t+1}: V_0 (the start state's value) must not change any return"),
+    Case(_call({"t": [[2.0]]}, {"t": [[5.0], [7.0]]}, 0.5, 0.3), "horizon H = 1: expected [[5.5]]"),
+    Case({"kind": "grad", "of": 0, "row": 0, "args": [{"t": [[0.0]] * 6, "grad": True}, {"t": [[0.0]] * 7}, 0.9, 0.5]},
+         "the gradient flows into the rewards: dG_0/dr_k = (gamma * lam)^k (stay in torch)"),
+])
+
+
+def _dream(seed, latent, hidden, embed, policy, batch, horizon, obs_seed, mode="no_grad"):
+    return {"kind": "dream", "model": {"seed": seed, "latent": latent, "hidden": hidden, "embed": embed},
+            "policy": policy, "obs0": {"randn": [batch, 6], "seed": obs_seed, "fresh": True},
+            "horizon": horizon, "mode": mode}
+
+
+DREAM = Test("dream_impl_tests", "04_imagination_gap", "dream", "pusht.evaluate:dream", [
+    Case(_dream(0, 4, 8, 5, 8, 3, 5, 30),
+         "shapes (horizon+1, B, D) and (horizon, B, A); frame 0 is the decoded posterior of the start "
+         "frame (h = 0, z = wm.filter_step(h, norm_obs0))", atol=1e-5),
+    Case(_dream(1, 3, 7, 4, 6, 4, 7, 31),
+         "the decoded dream and its actions, on another model, batch and horizon", atol=1e-5),
+    Case(_dream(1, 3, 7, 4, "recording", 4, 3, 32),
+         "the policy is called once per step on [h, z], first on [h = 0, z = posterior of the start "
+         "frame]; the start frame is filtered once, then only the prior is used", atol=1e-6),
+    Case(_dream(2, 3, 7, 4, "zero", 1, 1, 33, mode="inference"),
+         "works without autograd (under torch.inference_mode), for B = 1 and horizon = 1"),
+])
+
+TESTS = {t.test_id: t for t in (REWARD, LAMBDA, DREAM)}
+GUARD_WORDS = ("pusht.grading", "PUSHT_GRADING", "_PROBING", "__pusht_reference__", "__wrapped__",
+               "ReferenceRefused", "results/", ".npz")
+
+
+def reference_function(test: Test):
+    import importlib
+
+    module, name = test.reference.split(":")
+    return getattr(importlib.import_module(module), name)
+
+
+def reference_results(test: Test, fresh: int) -> list[dict]:
+    """The reference implementation's raw results on every case, computed in THIS process."""
+    from pusht.grading import probe
+
+    fn = reference_function(test)
+    return [probe(case.spec, fn, fresh) for case in test.cases]
+
+
+@dataclass
+class Verdict:
+    test_id: str
+    points: float
+    max_points: float
+    message: str
+
+
+def judge(test: Test, results_path, max_points: float, delegation: list[str] | None = None) -> Verdict:
+    """Points for one test cell from the raw results the kernel saved (or their absence)."""
+    if delegation:
+        return Verdict(test.test_id, 0.0, max_points,
+                       f"no credit: your notebook uses the package's own `{test.function}` "
+                       f"({'; '.join(delegation[:3])}). This exercise asks you to write it yourself.")
+    try:
+        with np.load(results_path, allow_pickle=False) as z:
+            saved = {k: z[k] for k in z.files}
+    except FileNotFoundError:
+        return Verdict(test.test_id, 0.0, max_points,
+                       "the test cell did not reach its checks (an earlier error, a timeout, or the "
+                       "kernel stopped before it): see the outputs above")
+    except Exception as e:
+        return Verdict(test.test_id, 0.0, max_points, f"the recorded results are unreadable ({type(e).__name__})")
+    try:
+        fresh = int(saved["fresh"])
+        if not 0 <= fresh < 2 ** 24:
+            raise ValueError
+    except (KeyError, ValueError, TypeError):
+        return Verdict(test.test_id, 0.0, max_points, "the recorded results are incomplete")
+    refs = reference_results(test, fresh)
+    passed = 0
+    first = None
+    for i, (case, ref) in enumerate(zip(test.cases, refs)):
+        ok, why = True, ""
+        if f"c{i}.error" in saved:
+            ok, why = False, f"your function raised {str(saved[f'c{i}.error'])[:200]}"
+        else:
+            for key, want in ref.items():
+                got = saved.get(f"c{i}.{key}")
+                if got is None or got.dtype.kind not in "fiu":
+                    ok, why = False, f"no numeric result for {key}"
+                    break
+                if got.shape != want.shape:
+                    ok, why = False, f"{key} has shape {tuple(got.shape)}, expected {tuple(want.shape)}"
+                    break
+                if not np.allclose(got, want, atol=case.atol, rtol=1e-5):
+                    ok, why = False, f"{key} differs from the expected values"
+                    break
+        passed += ok
+        if not ok and first is None:
+            first = f"check {i + 1}: {case.hint} ({why})"
+    n = len(test.cases)
+    if passed == n:
+        return Verdict(test.test_id, max_points, max_points, f"all {n} checks passed")
+    return Verdict(test.test_id, 0.0, max_points, f"{passed} of {n} checks passed; first failure: {first}")
+
+
+# --- the static check --------------------------------------------------------------------------------
+def _source(cell) -> str:
+    s = cell.get("source", "")
+    return "".join(s) if isinstance(s, list) else s
+
+
+def delegations(test: Test, cells, release_sources: set[str], locked_ids: set[str] = frozenset()) -> list[str]:
+    """Where the student's own code cells reach for the package's implementation of ``test``.
+
+    Cells identical to a release cell, and locked cells (nbgrader puts the instructor's version
+    back), are skipped. Flags: importing the
+    function from ``pusht``, reading an attribute of that name (``pusht.reward.reward_from_obs``,
+    ``_ev.dream``), naming it in a string (``getattr(m, "reward_from_obs")``), and any reference to
+    the grading harness itself.
+    """
+    name = test.function
+    found = []
+    for idx, cell in enumerate(cells):
+        src = _source(cell)
+        grade_id = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
+        if cell.get("cell_type") != "code" or src in release_sources or grade_id in locked_ids:
+            continue                   # the instructor's cells (locked ones are restored anyway)
+        try:
+            tree = ast.parse(_strip_magics(src))
+        except SyntaxError:
+            continue
+        for node in ast.walk(tree):
+            hit = None
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("pusht"):
+                names = {a.name for a in node.names}
+                if name in names or "*" in names or "grading" in names or node.module == "pusht.grading":
+                    hit = f"from {node.module} import {', '.join(sorted(names))}"
+            elif isinstance(node, ast.Import) and any(a.name.startswith("pusht.grading") for a in node.names):
+                hit = "import pusht.grading"
+            elif isinstance(node, ast.Attribute) and node.attr in (name, "grading", "_PROBING", "__wrapped__"):
+                hit = f"`.{node.attr}`"
+            elif isinstance(node, ast.Constant) and isinstance(node.value, str) and (
+                    node.value == name or any(w in node.value for w in GUARD_WORDS)):
+                hit = f"the string {node.value[:40]!r}"
+            if hit:
+                found.append(f"cell {idx + 1}, line {getattr(node, 'lineno', '?')}: {hit}")
+    return found
+
+
+def _strip_magics(src: str) -> str:
+    """IPython magics and shell escapes are not Python: blank them for the parser."""
+    return "\n".join("" if line.lstrip().startswith(("%", "!")) else line for line in src.splitlines())

@@ -1,0 +1,178 @@
+"""Grading a hostile class: no cheat gains a point, no student reads or changes another's work,
+nothing survives the batch, and honest-but-unusual submissions get every point they earn.
+
+The class is ``autograde/hostile_class.py`` (one student per attack or oddity, each described in
+its ``STUDENTS``), graded with the instructor's one command beside a correct student, with real
+nbgrader, its sqlite gradebook and the bubblewrap sandbox.
+"""
+
+import csv
+import os
+import secrets
+import sys
+import unicodedata
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "autograde"))
+
+import grade  # noqa: E402
+import sandbox  # noqa: E402
+from hostile_class import STUDENTS, write_zip  # noqa: E402
+from synthetic_class import build as synthetic  # noqa: E402
+
+TIMEOUT = 30
+IDS = {"Ann Lee": "Ann_Lee"}          # the folder-safe form of LMS ids (intake.normalise_student_id)
+
+
+@pytest.fixture(scope="module")
+def hostile(executed_notebooks, tmp_path_factory):
+    executed, errors = executed_notebooks
+    if any(errors.values()):
+        pytest.skip("a notebook fails on its own; see test_notebooks")
+    ok, why = sandbox.available()
+    if not ok:
+        pytest.skip(f"no sandbox on this machine ({why}); .ci/run installs bubblewrap")
+    tmp = tmp_path_factory.mktemp("hostile")
+    course = tmp / "course"
+    course.mkdir()
+    token = secrets.token_hex(16)
+    canary = course / "instructor_only.txt"
+    canary.write_text(f"CANARY {token}\n")
+    perfect = {k: v for k, v in synthetic(executed).items() if k.startswith("perfect_")}
+    subs = write_zip(tmp / "class.zip", executed, canary=str(canary), extra=perfect)
+    report = grade.grade_class(subs, course, timeout=TIMEOUT, log=print)
+    return course, report, token, tmp
+
+
+def scores(course, student, notebook):
+    from nbgrader.api import Gradebook, MissingEntry
+
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=grade.COURSE_ID) as gb:
+        try:
+            return {g.name: g.score for g in gb.find_submission_notebook(notebook, grade.ASSIGNMENT, student).grades}
+        except MissingEntry:
+            return None
+
+
+def all_text(course, student):
+    folder = course / "autograded" / student / grade.ASSIGNMENT
+    fb = course / "feedback" / student / grade.ASSIGNMENT
+    return "".join(p.read_text(errors="replace") for d in (folder, fb) if d.exists() for p in d.iterdir())
+
+
+@pytest.mark.parametrize("student", sorted(s for s, (_, pts) in STUDENTS.items() if pts is not None))
+def test_every_student_gets_exactly_what_their_answer_earns(hostile, student):
+    course, report, _, _ = hostile
+    sid = IDS.get(student, unicodedata.normalize("NFC", student))
+    what, expected = STUDENTS[student]
+    got = scores(course, sid, "02_reward")
+    assert got is not None, f"{student} ({what}) was not graded: {report.get(sid)}"
+    assert got["reward_impl_tests"] == expected, (student, what, report[sid]["verdicts"], report[sid]["notes"])
+
+
+def test_the_perfect_student_is_untouched_by_the_class(hostile):
+    course, report, _, _ = hostile
+    got = {nb: scores(course, "perfect", nb) for nb in ("02_reward", "03_imagination_actor", "04_imagination_gap")}
+    assert got["02_reward"]["reward_impl_tests"] == 4
+    assert got["03_imagination_actor"]["lambda_return_impl_tests"] == 4
+    assert got["04_imagination_gap"]["dream_impl_tests"] == 3 and got["04_imagination_gap"]["ex1_order"] == 1
+    assert scores(course, "perfect", "05_horizon")["ex2_order"] == 1
+
+
+def test_no_score_outside_its_range_and_grades_csv_equals_the_gradebook(hostile):
+    from nbgrader.api import Gradebook
+
+    course, report, _, _ = hostile
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=grade.COURSE_ID) as gb:
+        for s in report:
+            for nb in grade.NOTEBOOKS:
+                for g in (scores(course, s, nb[:-6]) or {}).values():
+                    assert g is None or 0 <= g <= 4
+        totals = {s.id: 0.0 for s in gb.students}          # a student with nothing graded scores 0
+        totals.update({s.student.id: s.score for s in gb.assignment_submissions(grade.ASSIGNMENT)})
+    text = (course / "grades.csv").read_text()
+    assert "hacked" not in text
+    rows = {r["student_id"]: float(r["raw_score"]) for r in csv.DictReader(text.splitlines())}
+    assert rows == pytest.approx(totals)
+    assert not (course / "manual_grades.csv").exists()
+
+
+def test_nobody_read_the_course(hostile):
+    course, report, token, _ = hostile
+    text = all_text(course, "snoop")
+    assert "LIST" in text or "NOLIST" in text, "the snooping cell did not run"
+    assert token not in text and "BEGIN SOLUTION" not in text and "gradebook.db" not in text
+    assert "perfect" not in text.replace("perfect_", "")
+
+
+def test_nothing_survives_the_batch(hostile):
+    uids = set(range(61000, 61900))
+    alive = []
+    for pid in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            status = Path(f"/proc/{pid}/status").read_text()
+        except OSError:
+            continue
+        uid = int(status.split("Uid:")[1].split()[0])
+        if uid in uids:
+            alive.append((pid, Path(f"/proc/{pid}/cmdline").read_bytes()[:80]))
+    assert not alive
+
+
+def test_no_network_and_limits_hold(hostile):
+    course, report, _, _ = hostile
+    assert "NET OPEN" not in all_text(course, "network") and "no network" in all_text(course, "network")
+    assert "stopped after" in all_text(course, "forkbomb")
+
+
+def test_feedback_pages_are_capped(hostile):
+    course, _, _, _ = hostile
+    page = course / "feedback" / "bigout" / grade.ASSIGNMENT / "02_reward.html"
+    assert page.exists() and page.stat().st_size < 3_000_000
+
+
+def test_delegating_to_the_package_is_explained(hostile):
+    _, report, _, _ = hostile
+    for s in ("delegate", "delegate2"):
+        assert "write it yourself" in report[s]["verdicts"]["reward_impl_tests"][2]
+
+
+@pytest.mark.parametrize("student", ["receiptprint", "receiptedit", "alreadylocked", "pipelinefirst"])
+def test_forged_receipts_earn_no_completion_point(hostile, student):
+    course, report, _, _ = hostile
+    assert scores(course, student, "04_imagination_gap")["ex1_order"] == 0
+    assert not report[student]["completion"]["ex1"][0]
+
+
+def test_the_kernel_dying_keeps_the_points_already_earned_with_a_note(hostile):
+    _, report, _, _ = hostile
+    assert any("points from the tests that had already run are kept" in n for n in report["diesafter"]["notes"])
+
+
+def test_unusual_uploads_and_ids(hostile):
+    course, report, _, tmp = hostile
+    assert any("(1)" in n for n in report["reupload"]["notes"])
+    chloe = [s for s in report if unicodedata.normalize("NFC", s) == unicodedata.normalize("NFC", "Chloé")]
+    assert len(chloe) == 1 and scores(course, chloe[0], "03_imagination_actor")["lambda_return_impl_tests"] == 4
+    assert not {"..", "/", "escape", "rooted", "mallory"} & set(report) or not scores(course, "mallory", "02_reward")
+    assert not list(tmp.glob("escape*")) and not Path("/abs").exists()
+    rejected = (course / "report.csv").read_text()
+    assert "escape_02_reward" in rejected and "mallory" in rejected
+    assert "perfect" in report and scores(course, "perfect", "02_reward")["reward_impl_tests"] == 4
+
+
+def test_without_a_sandbox_grading_runs_and_warns(tmp_path, monkeypatch):
+    import zipfile
+
+    monkeypatch.setattr(sandbox, "available", lambda: (False, "bubblewrap is not installed"))
+    course = tmp_path / "course"
+    course.mkdir()
+    with zipfile.ZipFile(tmp_path / "empty.zip", "w") as zf:
+        zf.writestr("readme.txt", "no notebooks here")
+    lines = []
+    with pytest.warns(UserWarning, match="NOT confined"):
+        grade.grade_class(tmp_path / "empty.zip", course, log=lines.append)
+    assert any("NOT confined" in line and "bubblewrap is not installed" in line for line in lines)
