@@ -194,7 +194,7 @@ def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | Non
 
 
 def _last_error(text: str) -> str:
-    lines = [l for l in text.strip().splitlines() if l.strip()]
+    lines = [l for l in text.strip().splitlines() if l.strip() and "NbGraderException" not in l]
     for l in reversed(lines):
         if "Error" in l or "error" in l:
             return l.strip()[:300]

@@ -82,9 +82,6 @@ def _reward(executed):
     return _load(executed, "02_reward")
 
 
-def _first_code_after_setup(nb):
-    return lambda c: c["cell_type"] == "code" and "make_config(" in _src(c)
-
 
 def build(executed: Path, canary: str = "/nonexistent") -> dict[str, bytes]:
     files: dict[str, bytes] = {}

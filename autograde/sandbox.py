@@ -115,11 +115,10 @@ def bwrap_command(workdir: Path, writable: list[Path], uid: int | None,
             cmd += ["--symlink", os.readlink(target), str(target)]
         elif target.exists():
             cmd += ["--ro-bind", str(target), str(target)]
-    for p in _ro_paths():
-        cmd += _parents(p, made) + ["--ro-bind", str(p), str(p)]
+    # the private /tmp first: a course, venv or package that lives under /tmp is bound on top of it
     cmd += ["--proc", "/proc", "--dev", "/dev", "--perms", "1777", "--tmpfs", "/tmp"]
-    made = {p for p in made if Path("/tmp") not in p.parents and p != Path("/tmp")}
-    for p in [Path(os.path.realpath(r)) for r in readonly]:
+    made.add(Path("/tmp"))
+    for p in _ro_paths() + [Path(os.path.realpath(r)) for r in readonly]:
         cmd += _parents(p, made) + ["--ro-bind", str(p), str(p)]
     for p in writable:
         p = Path(os.path.realpath(p))
