@@ -116,8 +116,8 @@ def test_a_file_that_is_not_a_notebook_scores_zero_with_a_note(graded):
     course, report, _ = graded
     assert cell_scores(course, "garbage", "04_imagination_gap") is None
     assert grades_csv(course)["garbage"] == 0
-    assert any("not a valid notebook" in n for n in report["garbage"]["notes"])
-    assert "not a valid notebook" in (course / "report.csv").read_text()
+    assert any("not a notebook" in n and "Download .ipynb" in n for n in report["garbage"]["notes"])
+    assert "not a notebook" in (course / "report.csv").read_text()
 
 
 def test_a_colab_download_grades_like_any_other(graded):
