@@ -63,6 +63,18 @@ def all_text(course, student):
     return "".join(p.read_text(errors="replace") for d in (folder, fb) if d.exists() for p in d.iterdir())
 
 
+def outputs(course, student):
+    """What the student's cells printed when the grader ran them (not their source)."""
+    import nbformat
+
+    text = []
+    for path in (course / "autograded" / student / grade.ASSIGNMENT).glob("*.ipynb"):
+        for cell in nbformat.read(path, as_version=4).cells:
+            for o in cell.get("outputs", []):
+                text.append(o.get("text", "") + o.get("evalue", "") + o.get("ename", ""))
+    return "\n".join(text)
+
+
 @pytest.mark.parametrize("student", sorted(s for s, (_, pts) in STUDENTS.items() if pts is not None))
 def test_every_student_gets_exactly_what_their_answer_earns(hostile, student):
     course, report, _, _ = hostile
@@ -100,14 +112,13 @@ def test_no_score_outside_its_range_and_grades_csv_equals_the_gradebook(hostile)
     assert not (course / "manual_grades.csv").exists()
 
 
-@pytest.mark.xfail(reason="open: in a CI-clone run the canary token appeared in the snoop's graded "
-                          "files; not yet explained (see the session note)", strict=False)
 def test_nobody_read_the_course(hostile):
     course, report, token, _ = hostile
-    text = all_text(course, "snoop")
-    assert "LIST" in text or "NOLIST" in text, "the snooping cell did not run"
-    assert token not in text and "BEGIN SOLUTION" not in text and "gradebook.db" not in text
-    assert "perfect" not in text.replace("perfect_", "")
+    out = outputs(course, "snoop")
+    assert "SEEN" in out and "LIST" in out, f"the snooping cell did not run to the end:\n{out[-2000:]}"
+    assert "FOUND" not in out and out.count("DENIED") == 3
+    assert "files; []" in out, "the kernel could see course files: " + out[out.index("SEEN"):][:500]
+    assert token not in all_text(course, "snoop")
 
 
 def test_nothing_survives_the_batch(hostile):
@@ -126,9 +137,12 @@ def test_nothing_survives_the_batch(hostile):
 
 def test_no_network_and_limits_hold(hostile):
     course, report, _, _ = hostile
-    text = all_text(course, "network")
-    assert "NET OPEN 127.0.0.1" not in text and "NET OPEN\\n" not in text and "no network:" in text
-    assert "stopped after" in all_text(course, "forkbomb")
+    out = outputs(course, "network")
+    assert "NET OPEN" not in out and out.count("no network:") == 3
+    # the fork bomb runs into its process limit; the kernel it shares that limit with may go down
+    # with it, which costs only what had not run yet (its test points are checked above)
+    assert any("points from the tests that had already run are kept" in n or "stopped after" in n
+               for n in report["forkbomb"]["notes"]) or "stopped after" in outputs(course, "forkbomb")
 
 
 def test_feedback_pages_are_capped(hostile):
