@@ -118,7 +118,7 @@ DREAM = Test("dream_impl_tests", "04_imagination_gap", "dream", "pusht.evaluate:
 
 TESTS = {t.test_id: t for t in (REWARD, LAMBDA, DREAM)}
 GUARD_WORDS = ("pusht.grading", "PUSHT_GRADING", "_PROBING", "__pusht_reference__", "__wrapped__",
-               "ReferenceRefused", "results/", ".npz")
+               "ReferenceRefused")
 
 
 def reference_function(test: Test):
@@ -139,32 +139,31 @@ def reference_results(test: Test, fresh: int) -> list[dict]:
 @dataclass
 class Verdict:
     test_id: str
-    points: float
-    max_points: float
+    passed: bool               # every case matched: the cell earns all its points, else none
     message: str
 
 
-def judge(test: Test, results_path, max_points: float, delegation: list[str] | None = None) -> Verdict:
-    """Points for one test cell from the raw results the kernel saved (or their absence)."""
+def judge(test: Test, results_path, delegation: list[str] | None = None) -> Verdict:
+    """The verdict on one test cell from the raw results the kernel saved (or their absence)."""
     if delegation:
-        return Verdict(test.test_id, 0.0, max_points,
+        return Verdict(test.test_id, False,
                        f"no credit: your notebook uses the package's own `{test.function}` "
                        f"({'; '.join(delegation[:3])}). This exercise asks you to write it yourself.")
     try:
         with np.load(results_path, allow_pickle=False) as z:
             saved = {k: z[k] for k in z.files}
     except FileNotFoundError:
-        return Verdict(test.test_id, 0.0, max_points,
+        return Verdict(test.test_id, False,
                        "the test cell did not reach its checks (an earlier error, a timeout, or the "
                        "kernel stopped before it): see the outputs above")
     except Exception as e:
-        return Verdict(test.test_id, 0.0, max_points, f"the recorded results are unreadable ({type(e).__name__})")
+        return Verdict(test.test_id, False, f"the recorded results are unreadable ({type(e).__name__})")
     try:
         fresh = int(saved["fresh"])
         if not 0 <= fresh < 2 ** 24:
             raise ValueError
     except (KeyError, ValueError, TypeError):
-        return Verdict(test.test_id, 0.0, max_points, "the recorded results are incomplete")
+        return Verdict(test.test_id, False, "the recorded results are incomplete")
     refs = reference_results(test, fresh)
     passed = 0
     first = None
@@ -189,8 +188,8 @@ def judge(test: Test, results_path, max_points: float, delegation: list[str] | N
             first = f"check {i + 1}: {case.hint} ({why})"
     n = len(test.cases)
     if passed == n:
-        return Verdict(test.test_id, max_points, max_points, f"all {n} checks passed")
-    return Verdict(test.test_id, 0.0, max_points, f"{passed} of {n} checks passed; first failure: {first}")
+        return Verdict(test.test_id, True, f"all {n} checks passed")
+    return Verdict(test.test_id, False, f"{passed} of {n} checks passed; first failure: {first}")
 
 
 # --- the static check --------------------------------------------------------------------------------

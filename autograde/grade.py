@@ -183,12 +183,11 @@ def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | Non
             with Gradebook(config.CourseDirectory.db_url, course_id=COURSE_ID) as gb:
                 sub = gb.find_submission_notebook(nb_id, ASSIGNMENT, student)
                 entry["scores"] = {g.name: g.auto_score for g in sub.grades}
+        # judged here, in the worker, which the kernel cannot reach (the results files are its)
         for test in checks.TESTS.values():
             if name.startswith(test.notebook):
-                entry["verdicts"][test.test_id] = str(grading / "results" / f"{test.test_id}.npz")
-        # judged here, in the worker, which the kernel cannot reach (the verdicts need the files)
-        for tid, path in entry["verdicts"].items():
-            entry["verdicts"][tid] = vars(checks.judge(checks.TESTS[tid], path, 0.0))
+                results = grading / "results" / f"{test.test_id}.npz"
+                entry["verdicts"][test.test_id] = vars(checks.judge(test, results))
         out[name] = entry
     return out
 
@@ -334,8 +333,8 @@ def record(course: Path, report: dict, results: dict) -> None:
                         v = entry["verdicts"][g]
                         found = rep["delegated"].get(g)
                         if found:
-                            v = vars(checks.judge(checks.TESTS[g], "", 0.0, delegation=found))
-                        grade.manual_score = grade.max_score if v["message"].startswith("all ") else 0.0
+                            v = vars(checks.judge(checks.TESTS[g], "", delegation=found))
+                        grade.manual_score = grade.max_score if v["passed"] else 0.0
                         grade.needs_manual_grade = False
                         rep["verdicts"][g] = (grade.manual_score, grade.max_score, v["message"])
                     ex = g[:-len("_order")] if g.endswith("_order") else None
