@@ -97,6 +97,40 @@ LAMBDA = Test("lambda_return_impl_tests", "03_imagination_actor", "lambda_return
 ])
 
 
+def _losses_args(seed, H, B, S, hidden, gamma=0.99, lam=0.95, ent=3e-4, grad=()):
+    """Arguments of actor_critic_losses: a seeded agent, dreamed states (H+1, B, S), rewards (H, B)
+    in the reward's range [-1, 0], an entropy, gamma, lam, ent_coef and the chapter's return."""
+    return [{"agent": {"seed": seed, "state": S, "hidden": hidden}},
+            {"randn": [H + 1, B, S], "seed": seed + 1, "fresh": True, "grad": "states" in grad},
+            {"rand": [H, B], "seed": seed + 2, "fresh": True, "lo": -1.0, "hi": 0.0, "grad": "rewards" in grad},
+            {"t": 1.3, "grad": "entropy" in grad}, gamma, lam, ent, {"fn": "lambda_return"}]
+
+
+_ALL = ("states", "rewards", "entropy")
+LOSSES = Test("losses_impl_tests", "03_imagination_actor", "actor_critic_losses",
+              "pusht.imagination:actor_critic_losses", [
+    Case(_call(*_losses_args(40, 3, 2, 6, 8, 0.9, 0.5, 0.1)),
+         "the two values on a small case: actor = -(mean lambda-return + ent_coef * entropy); critic = "
+         "0.5 * mean squared error between V(states 0..H-1) and the returns"),
+    Case(_call(*_losses_args(41, 15, 64, 80, 64)),
+         "the training's shapes: H = 15, B = 64, state size 80, the chapter's gamma, lam and ent_coef"),
+    Case(_call(*_losses_args(42, 6, 5, 7, 9, 0.8, 0.2, 0.05)),
+         "use the gamma, lam and ent_coef arguments, and the return_fn you are given"),
+    Case({"kind": "grad", "of": 0, "args": _losses_args(43, 5, 4, 6, 8, 0.9, 0.8, 0.01, grad=_ALL)},
+         "the actor loss's gradient must flow into the rewards, the entropy AND the states through the "
+         "critic's values: the return's bootstrap keeps its gradient (detaching it is the page's wiring, "
+         "in which the critic never reaches the actor)"),
+    Case({"kind": "grad", "of": 1, "args": _losses_args(44, 5, 4, 6, 8, 0.9, 0.8, 0.01, grad=("states",))},
+         "the critic loss must send no gradient into the imagined states (read them detached): "
+         "otherwise training the critic would move the actor"),
+    Case({"kind": "grad", "of": 1, "args": _losses_args(45, 5, 4, 6, 8, 0.9, 0.8, 0.01, grad=("rewards",))},
+         "the critic's target must be detached: no gradient from the critic loss into the rewards"),
+    Case({"kind": "grad", "of": 1, "module_grads": ["critic"], "args": _losses_args(46, 5, 4, 6, 8, 0.9, 0.8, 0.01)},
+         "the critic loss's gradient on the critic's own weights: V of states 0..H-1 (not 1..H) "
+         "against the returns, 0.5 * mean squared error"),
+])
+
+
 def _dream(seed, latent, hidden, embed, policy, batch, horizon, obs_seed, mode="no_grad"):
     return {"kind": "dream", "model": {"seed": seed, "latent": latent, "hidden": hidden, "embed": embed},
             "policy": policy, "obs0": {"randn": [batch, 6], "seed": obs_seed, "fresh": True},
@@ -116,7 +150,7 @@ DREAM = Test("dream_impl_tests", "04_imagination_gap", "dream", "pusht.evaluate:
          "works without autograd (under torch.inference_mode), for B = 1 and horizon = 1"),
 ])
 
-TESTS = {t.test_id: t for t in (REWARD, LAMBDA, DREAM)}
+TESTS = {t.test_id: t for t in (REWARD, LAMBDA, LOSSES, DREAM)}
 GUARD_WORDS = ("pusht.grading", "PUSHT_GRADING", "_PROBING", "__pusht_reference__", "__wrapped__",
                "ReferenceRefused")
 

@@ -23,7 +23,7 @@ from datetime import datetime
 import nbformat
 
 COLAB_CELL_KEYS = ("executionInfo", "colab", "outputId")
-LOCK_RE = re.compile(r"^\[prediction (?P<again>already )?locked\] (?P<ex>ex\d): \((?P<choice>[abc])\) at "
+LOCK_RE = re.compile(r"^\[prediction (?P<again>already )?locked\] (?P<ex>ex\d): \((?P<choice>[a-d])\) at "
                      r"(?P<at>\S+?)(?:;.*)?$")
 RUN_RE = re.compile(r"^\[experiment started\] (?P<ex>ex\d) at (?P<at>\S+) \(prediction locked at (?P<locked>\S+)\)$")
 ANY_RECEIPT = re.compile(r"\[(prediction (already )?locked|experiment started)\] ex\d")

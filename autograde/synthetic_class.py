@@ -67,7 +67,7 @@ def build(executed: Path) -> dict[str, bytes]:
     # badpred: the learner's own cell with an invalid choice; its outputs show the refusals.
     nb = _load(executed, "04_imagination_gap")
     for cell in _cells(nb, lambda c: _grade_id(c) == "ex1_prediction"):
-        cell["source"] = re.sub(r'PREDICTION = "[abc]"', 'PREDICTION = "z"', _src(cell))
+        cell["source"] = re.sub(r'PREDICTION = "[a-d]"', 'PREDICTION = "z"', _src(cell))
     for cell in nb["cells"]:
         for out in cell.get("outputs", []):
             if "[prediction locked] ex1" in "".join(out.get("text", [])) or \

@@ -51,6 +51,9 @@ class Config:
     # --- learning in imagination (page: actor_lr, imag_iters) ----------------------------------
     context: int = 2
     """Real transitions filtered into (h, z) before each dream starts (the GRU settles in a few)."""
+    actor_seed: int = 0
+    """Which actor-critic to train on the same frozen world model: 0 is the chapter's, 1, 2, ...
+    give other initial weights and other dreams (the seed-to-seed spread Exercise 2 judges with)."""
     imag_iters: int = 400
     """Actor-critic updates, each on a fresh batch of dreams (page: 400)."""
     imag_batch: int = 64
@@ -65,6 +68,10 @@ class Config:
     """Lambda of the lambda-return: 0 trusts the critic after one step, 1 the whole dream."""
     ent_coef: float = 3e-4
     """Weight of the entropy bonus (DreamerV3's value)."""
+    critic_wiring: str = "dreamer"
+    """How the critic reaches the actor: "dreamer" (DreamerV1: the actor's lambda-return bootstraps
+    on the critic's values of the imagined states with their gradient) or "page" (the chapter
+    page's code: values detached, so the actor learns from the dreamed rewards alone)."""
     monitor_every: int = 100
     """Measure the current policy in the REAL sim every this many iterations (the "real floor")."""
     monitor_episodes: int = 10
@@ -84,7 +91,7 @@ class Config:
         for name in positive:
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be at least 1, got {getattr(self, name)}")
-        for name in ["wm_epochs", "context"]:
+        for name in ["wm_epochs", "context", "actor_seed"]:
             if getattr(self, name) < 0:
                 raise ValueError(f"{name} must be 0 or more, got {getattr(self, name)}")
         for name in ["wm_lr", "actor_lr"]:
@@ -97,6 +104,8 @@ class Config:
             raise ValueError(f"lam must be in [0, 1], got {self.lam}")
         if self.ent_coef < 0:
             raise ValueError(f"ent_coef must be 0 or more, got {self.ent_coef}")
+        if self.critic_wiring not in ("dreamer", "page"):
+            raise ValueError(f"critic_wiring must be 'dreamer' or 'page', got {self.critic_wiring!r}")
         if self.context >= self.seq_len:
             raise ValueError(f"context ({self.context}) must be shorter than seq_len ({self.seq_len})")
 

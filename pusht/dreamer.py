@@ -28,11 +28,12 @@ import numpy as np
 import torch
 
 from .agent import ActorCritic
+from .analysis import shift_metrics
 from .config import Config, field_docs, make_config
 from .data import EVAL_SEED_BASE, MONITOR_SEED_BASE, load_expert_data, start_seeds
 from .env import ACT_DIM, OBS_DIM, OBS_NAMES
 from .evaluate import policy_of, real_rollout, two_world_eval
-from .imagination import freeze, lambda_return, train_in_imagination
+from .imagination import WIRINGS, freeze, lambda_return, train_in_imagination
 from .record import RERUN_MISSING, record_rerun, rerun_available
 from .reward import reward_from_obs
 from .world_model import WorldModel, prediction_error_vs_copy_last, train_world_model
@@ -86,8 +87,8 @@ class RunResult:
 # Which config fields each stage depends on: the key of its on-disk cache.
 WM_FIELDS = ("seed", "device", "threads", "n_episodes", "seq_len", "n_val_episodes", "latent_dim",
              "hidden_dim", "embed_dim", "wm_epochs", "wm_lr", "batch_size", "context")
-AGENT_FIELDS = WM_FIELDS + ("imag_iters", "imag_batch", "imag_horizon", "actor_lr", "gamma", "lam",
-                            "ent_coef", "monitor_every", "monitor_episodes", "eval_horizon")
+AGENT_FIELDS = WM_FIELDS + ("actor_seed", "imag_iters", "imag_batch", "imag_horizon", "actor_lr", "gamma", "lam",
+                            "ent_coef", "critic_wiring", "monitor_every", "monitor_episodes", "eval_horizon")
 
 
 # ... and which modules: editing one of these invalidates the stage's cache, editing others does not.
@@ -167,19 +168,21 @@ def world_model_stage(cfg: Config, cache_dir=None, model_cache=None, log=print,
 
 
 def agent_stage(cfg: Config, stage: WorldModelStage, model_cache=None, log=print, progress=None,
-                reward_fn=reward_from_obs, return_fn=lambda_return) -> AgentStage:
+                reward_fn=reward_from_obs, return_fn=lambda_return, loss_fn=None) -> AgentStage:
     """Step 2: an actor-critic learns purely inside the frozen world model of ``stage``.
 
     Reseeded on its own, so a cached world model gives the same agent as a fresh one.
-    ``reward_fn`` and ``return_fn`` let a learner's own implementations drive the training.
+    ``reward_fn``, ``return_fn`` and ``loss_fn`` let a learner's own implementations drive the
+    training (``loss_fn=None``: the losses of ``cfg.critic_wiring``).
     """
     def build():
         t0 = time.perf_counter()
         torch.set_num_threads(cfg.threads)
         T = stage.data.torch(cfg.device)
         mean, std = T["mean"], T["std"]
-        torch.manual_seed(cfg.seed + 1)
-        gen = torch.Generator().manual_seed(cfg.seed + 1)
+        agent_seed = cfg.seed + 1 + 7919 * cfg.actor_seed     # actor_seed 0: the chapter's seed + 1
+        torch.manual_seed(agent_seed)
+        gen = torch.Generator().manual_seed(agent_seed)
         agent = ActorCritic(cfg.hidden_dim + cfg.latent_dim, ACT_DIM, cfg.hidden_dim).to(cfg.device)
         init_agent = copy.deepcopy(agent)
         monitor_seeds = start_seeds(MONITOR_SEED_BASE, cfg.seed, cfg.monitor_episodes)
@@ -192,10 +195,11 @@ def agent_stage(cfg: Config, stage: WorldModelStage, model_cache=None, log=print
             hist = train_in_imagination(stage.wm, agent, T["train_obs"][:, : cfg.context + 1],
                                         T["train_act"][:, : cfg.context], mean, std, cfg, gen,
                                         monitor=monitor, progress=_wrap(progress, "imagination"),
-                                        log=log, reward_fn=reward_fn, return_fn=return_fn)
+                                        log=log, reward_fn=reward_fn, return_fn=return_fn,
+                                        loss_fn=loss_fn)
         return AgentStage(agent, init_agent, hist, time.perf_counter() - t0)
 
-    custom = reward_fn is not reward_from_obs or return_fn is not lambda_return
+    custom = reward_fn is not reward_from_obs or return_fn is not lambda_return or loss_fn is not None
     return _cached(None if custom else _cache_path(model_cache, "agent", cfg, AGENT_FIELDS, AGENT_MODULES), build)
 
 
@@ -214,7 +218,9 @@ def run(cfg: Config, cache_dir=None, model_cache=None, log=print, progress=None)
     T = ws.data.torch(cfg.device)
     eval_seeds = start_seeds(EVAL_SEED_BASE, cfg.seed, cfg.eval_episodes)
     ev, rollouts = two_world_eval(ws.wm, ag.agent, ag.init_agent, eval_seeds, cfg.eval_horizon,
-                                  T["mean"], T["std"])
+                                  T["mean"], T["std"], train_horizon=cfg.imag_horizon)
+    ev.update(shift_metrics(ws.wm, rollouts, ws.data, T["mean"], T["std"], cfg.imag_horizon,
+                            cfg.seq_len))
     timing = {"data_s": ws.data_seconds, "world_model_s": ws.seconds - ws.data_seconds,
               "imagination_s": ag.seconds,
               "eval_s": time.perf_counter() - t3, "total_s": time.perf_counter() - t0}
@@ -236,6 +242,13 @@ def summarize(cfg: Config, ev: dict, ws: WorldModelStage, ag: AgentStage) -> dic
         **ev,
         "imagined_reward_first20_train": float(imag_hist["imag_reward"][:k].mean()),
         "imagined_reward_last20_train": float(imag_hist["imag_reward"][-k:].mean()),
+        # the noise of last20 - first20: each iteration's reward is a mean over one random batch of
+        # dreams, so the two 20-iteration means carry a standard error read off their own spread
+        "imagined_reward_rise_se": float(np.sqrt(imag_hist["imag_reward"][:k].var(ddof=1) / k
+                                                 + imag_hist["imag_reward"][-k:].var(ddof=1) / k))
+        if k > 1 else float("nan"),
+        "imagined_return_first20_train": float(imag_hist["imag_return"][:k].mean()),
+        "imagined_return_last20_train": float(imag_hist["imag_return"][-k:].mean()),
         "real_reward_monitor_first": float(imag_hist["monitor_real_reward"][0]),
         "real_reward_monitor_last": float(imag_hist["monitor_real_reward"][-1]),
         "wm_final_recon_loss": float(wm_hist["recon"][-1]),
@@ -367,6 +380,9 @@ def report(m: dict, log=print) -> None:
 
 
 # --- command line ------------------------------------------------------------------------------
+CHOICES = {"critic_wiring": WIRINGS}
+
+
 def build_parser() -> argparse.ArgumentParser:
     docs = field_docs()
     # Each config flag's help states its real default; argparse's own would print "None", the
@@ -381,7 +397,7 @@ def build_parser() -> argparse.ArgumentParser:
         kind = {bool: None, int: int, float: float, str: str}.get(type(default), Path)
         # default=None marks "not given", so --smoke can fill in only what the user left alone.
         p.add_argument(f"--{f.name}", type=kind, default=None, help=f"{docs.get(f.name, '')} "
-                       f"(default: {default})")
+                       f"(default: {default})", choices=CHOICES.get(f.name))
     p.add_argument("--cache", type=Path, default=None,
                    help="folder for cached expert data (default: $PUSHT_CACHE or ~/.cache/pusht-dreamer)")
     p.add_argument("--no-cache", action="store_true", help="always collect expert data afresh")

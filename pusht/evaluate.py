@@ -142,13 +142,16 @@ TOUCH_TOL = 0.003   # m: a rim within 3 mm of the T counts as a touch
 
 
 def two_world_eval(wm, agent, init_agent, seeds, horizon: int, mean, std,
-                   dream_fn=dream) -> tuple[dict, dict]:
+                   dream_fn=dream, train_horizon: int | None = None) -> tuple[dict, dict]:
     """Evaluate ``agent`` in the dream and in reality on the same starts, plus two control dreams.
 
     ``dream_fn`` does the dreaming (see :func:`dream`); a learner can pass their own.
 
     Returns ``(metrics, rollouts)``: metrics is a flat dict of floats, rollouts maps
-    ``"dream"``, ``"real"``, ``"dream_zero"`` and ``"dream_untrained"`` to ``Rollout``.
+    ``"dream"``, ``"real"`` (the trained policy; also under ``"dream_trained"``/``"real_trained"``),
+    ``"dream_zero"``, ``"dream_untrained"``, ``"real_zero"`` and ``"real_untrained"`` to ``Rollout``.
+    With ``train_horizon``, the gap and its split (``analysis.gap_split``) are measured over the
+    first ``train_horizon`` steps (what the actor's gradient saw) and over all of them.
     """
     was_training = agent.training
     agent.eval()
@@ -159,7 +162,11 @@ def two_world_eval(wm, agent, init_agent, seeds, horizon: int, mean, std,
         "real": real,
         "dream_zero": dream_rollout(wm, zero_policy, obs0, horizon, mean, std, dream_fn),
         "dream_untrained": dream_rollout(wm, policy_of(init_agent), obs0, horizon, mean, std, dream_fn),
+        # the same two controls in reality: what zero actions and the untrained actor really earn
+        "real_zero": real_rollout(wm, zero_policy, seeds, horizon, mean, std),
+        "real_untrained": real_rollout(wm, policy_of(init_agent), seeds, horizon, mean, std),
     }
+    rollouts["dream_trained"], rollouts["real_trained"] = rollouts["dream"], rollouts["real"]
     agent.train(was_training)
 
     dream = rollouts["dream"]
@@ -185,4 +192,12 @@ def two_world_eval(wm, agent, init_agent, seeds, horizon: int, mean, std,
     for name, key in (("zero_action", "dream_zero"), ("untrained_actor", "dream_untrained")):
         metrics[f"{name}_dream_return_per_step"] = float(rollouts[key].return_per_step.mean())
         metrics[f"{name}_dream_final_tee_dist"] = float(rollouts[key].final_tee_dist.mean())
+    if train_horizon is not None:
+        from .analysis import gap_split
+
+        for span, steps in (("train_horizon", min(train_horizon, horizon)), ("eval_horizon", None)):
+            for key, value in gap_split(rollouts, steps).items():
+                name = f"{key}_return_per_step" if key.endswith(("_dream", "_real")) else (
+                    key.replace("gap", "imagination_gap") if key.startswith("gap") else f"gap_{key}")
+                metrics[f"{name}_{span}"] = value
     return metrics, rollouts

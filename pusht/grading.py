@@ -17,7 +17,7 @@ cannot be saved at all.
 Outside grading (``PUSHT_GRADING_DIR`` unset), ``submit`` does nothing, so learners never notice it.
 
 The chapter's reference implementations of the exercises (``reward_from_obs``, ``lambda_return``,
-``dream``) are marked ``@reference``: during a probe they refuse to run, so a submission that
+``actor_critic_losses``, ``dream``) are marked ``@reference``: during a probe they refuse to run, so a submission that
 merely delegates to the package's own implementation produces no numbers (and the grader's static
 check of the student's source says why it earns no credit).
 """
@@ -61,7 +61,9 @@ def _torch():
 def build_arg(spec, fresh: int):
     """One argument of a probe call from its JSON spec.
 
-    ``{"t": nested list}`` a float32 tensor; ``{"randn": shape, "seed": s}`` standard normal from
+    ``{"agent": {"seed", "state", "hidden"}}`` a freshly seeded ``ActorCritic``;
+    ``{"fn": "lambda_return"}`` the chapter's lambda-return (not refused while probing: an
+    exercise may build on it); ``{"t": nested list}`` a float32 tensor; ``{"randn": shape, "seed": s}`` standard normal from
     ``torch.Generator().manual_seed(s)`` (``"fresh": true`` adds the per-run random ``fresh`` to
     the seed, so inputs cannot be known in advance); ``{"rand": shape, "seed": s, "lo", "hi"}``
     uniform; ``"grad": true`` makes it a leaf that requires grad. Numbers pass through.
@@ -69,6 +71,15 @@ def build_arg(spec, fresh: int):
     torch = _torch()
     if not isinstance(spec, dict):
         return spec
+    if "agent" in spec:                   # {"agent": {"seed", "state", "hidden"}}: an ActorCritic
+        from .agent import ActorCritic
+
+        a = spec["agent"]
+        torch.manual_seed(int(a["seed"]))
+        return ActorCritic(int(a["state"]), 2, int(a["hidden"]))
+    if spec.get("fn") == "lambda_return":   # the chapter's return, usable while probing
+        from .imagination import lambda_return
+        return lambda_return.__wrapped__
     if "t" in spec:
         x = torch.tensor(spec["t"], dtype=torch.float32)
     else:
@@ -128,7 +139,8 @@ def probe(case: dict, fn, fresh: int = 0) -> dict:
 
     Kinds: ``call`` (the outputs, and every tensor argument after the call, to catch in-place
     edits), ``grad`` (gradients of the sum of output ``of`` (optionally row ``row``) with respect
-    to every argument that requires grad), ``dream`` (decoded frames, actions, encoder and
+    to every argument that requires grad, and to the parameters of each module argument's parts
+    named in ``module_grads``), ``dream`` (decoded frames, actions, encoder and
     posterior call counts, the states a recording policy saw, the largest change of any model
     parameter).
     """
@@ -152,6 +164,12 @@ def probe(case: dict, fn, fresh: int = 0) -> dict:
                 for j, a in enumerate(args):
                     if isinstance(a, torch.Tensor) and a.requires_grad:
                         out[f"grad{j}"] = _as_array(a.grad if a.grad is not None else torch.zeros_like(a))
+                    elif isinstance(a, torch.nn.Module):
+                        for part in case.get("module_grads", []):
+                            params = list(getattr(a, part).parameters())
+                            out[f"grad{j}.{part}"] = np.concatenate([
+                                _as_array(p.grad if p.grad is not None else torch.zeros_like(p)).ravel()
+                                for p in params])
                 return out
         for k, r in enumerate(result):
             out[f"out{k}"] = _as_array(r)

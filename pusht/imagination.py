@@ -7,7 +7,15 @@ Every gradient the actor sees comes from a dream. Each update:
 3. decode every dreamed state and score it with the analytic reward (``reward.py``);
 4. mix those rewards with the critic's bootstrap into Dreamer's lambda-return;
 5. the actor maximises the return by backpropagating through the frozen model (pathwise
-   gradient); the critic regresses on the detached return.
+   gradient), *through the critic's values too*; the critic regresses on the detached return.
+
+Step 5 is DreamerV1's wiring (``danijar/dreamer``, ``Dreamer._train``): the values inside the
+actor's return are computed on the imagined features WITH their gradient, so the critic's slope
+tells the actor which way is better beyond the last dreamed step, while only the actor's own
+parameters are stepped by the actor loss. The critic is trained on detached features and a
+detached target. ``critic_wiring="page"`` keeps the chapter page's version as a contrast: there
+the values are detached, so the actor's gradient comes from the dreamed rewards alone and the
+critic never reaches it.
 """
 
 from __future__ import annotations
@@ -69,23 +77,97 @@ def imagine(wm, agent, h, z, horizon: int):
     return states, obs_pred, agent.entropy()
 
 
+WIRINGS = ("dreamer", "page")
+
+
+@reference("03_imagination_actor: actor_critic_losses")
+def actor_critic_losses(agent, states, rewards, entropy, gamma: float, lam: float, ent_coef: float,
+                        return_fn=lambda_return):
+    """Dreamer's two losses on one batch of dreams. Returns ``(actor_loss, critic_loss)``, scalars.
+
+    ``states`` (H+1, B, S): the imagined [h, z], carrying the gradient back to the actor's actions.
+    ``rewards`` (H, B): the decoded dream's rewards, carrying gradient too. ``entropy``: the
+    actor's entropy (a scalar tensor).
+
+    * actor: maximise the mean lambda-return plus ``ent_coef`` x entropy. The return bootstraps
+      on the critic's values of the imagined states *with their gradient*: the actor learns from
+      the critic's slope as well as from the rewards.
+    * critic: regress V(state) for states 0..H-1 on the return, with the states and the target
+      both detached: the critic must not move the actor, nor chase a target that moves with it.
+    """
+    values = agent.value(states)                                        # (H+1, B), gradient kept
+    returns = return_fn(rewards, values, gamma, lam)                    # (H, B)
+    actor_loss = -(returns.mean() + ent_coef * entropy)
+    critic_loss = 0.5 * F.mse_loss(agent.value(states.detach())[:-1], returns.detach())
+    return actor_loss, critic_loss
+
+
+def page_losses(agent, states, rewards, entropy, gamma: float, lam: float, ent_coef: float,
+                return_fn=lambda_return):
+    """The chapter page's wiring, kept as a measured contrast: the values are computed on
+    detached states and detached again inside the return, so no gradient from the critic ever
+    reaches the actor (its gradient comes from the H dreamed rewards alone)."""
+    values = agent.value(states.detach())
+    returns = return_fn(rewards, values.detach(), gamma, lam)
+    actor_loss = -(returns.mean() + ent_coef * entropy)
+    critic_loss = 0.5 * F.mse_loss(values[:-1], returns.detach())
+    return actor_loss, critic_loss
+
+
+def losses_for(wiring: str):
+    """The loss function of a ``critic_wiring`` value."""
+    if wiring == "dreamer":
+        return actor_critic_losses
+    if wiring == "page":
+        return page_losses
+    raise ValueError(f"critic_wiring must be one of {WIRINGS}, got {wiring!r}")
+
+
+def actor_params(agent) -> list:
+    return [*agent.actor.parameters(), agent.log_std]
+
+
+def set_gradients(agent, actor_loss, critic_loss, clip: float = 100.0) -> tuple[float, float]:
+    """Put each loss's gradient on its own parameters only, as Dreamer's two optimisers do.
+
+    The actor's parameters get the gradient of ``actor_loss`` (none of the critic loss); the
+    critic's get the gradient of ``critic_loss`` (none of the actor loss, though the actor's
+    return runs through the critic). Each group is clipped to norm ``clip`` on its own.
+    Returns the two norms before clipping.
+    """
+    a_params, c_params = actor_params(agent), list(agent.critic.parameters())
+    a_grads = torch.autograd.grad(actor_loss, a_params, retain_graph=True, allow_unused=True)
+    c_grads = torch.autograd.grad(critic_loss, c_params, allow_unused=True)
+    for params, grads in ((a_params, a_grads), (c_params, c_grads)):
+        for p, g in zip(params, grads):
+            p.grad = torch.zeros_like(p) if g is None else g
+    a_norm = nn.utils.clip_grad_norm_(a_params, clip)
+    c_norm = nn.utils.clip_grad_norm_(c_params, clip)
+    return float(a_norm), float(c_norm)
+
+
 def train_in_imagination(wm, agent, starts_obs, starts_act, mean, std, cfg, gen: torch.Generator,
                          monitor=None, progress=None, log=print, reward_fn=reward_from_obs,
-                         return_fn=lambda_return):
+                         return_fn=lambda_return, loss_fn=None):
     """Train ``agent`` purely in dreams of the frozen ``wm``. Returns the training history.
 
     ``starts_obs`` (N, C+1, D) and ``starts_act`` (N, C, A): normalised real frames to warm the
     start states from. ``monitor(agent) -> float``, if given, is called every
     ``cfg.monitor_every`` iterations and at the last one, and should return the policy's mean
     reward per step in the REAL sim: it only watches, no gradient ever comes from it.
-    ``reward_fn(norm_obs, mean, std)`` and ``return_fn(rewards, values, gamma, lam)`` default to
-    this package's; a learner can pass their own and watch it drive the training.
-    History: ``imag_reward`` (per-step imagined reward, every iteration), ``critic_loss``,
+    ``reward_fn(norm_obs, mean, std)``, ``return_fn(rewards, values, gamma, lam)`` and ``loss_fn``
+    (the signature of :func:`actor_critic_losses`; default: the one ``cfg.critic_wiring`` names)
+    default to this package's; a learner can pass their own and watch it drive the training.
+    History: ``imag_reward`` (per-step imagined reward, every iteration), ``imag_return`` (the
+    mean lambda-return the actor maximised, critic bootstrap included), ``critic_loss``,
     ``log_std``, and ``monitor_iters``/``monitor_real_reward``.
     """
     freeze(wm)
+    if loss_fn is None:              # a learner's own loss_fn uses their own lambda-return
+        package_losses = losses_for(cfg.critic_wiring)
+        loss_fn = lambda *args: package_losses(*args, return_fn=return_fn)  # noqa: E731
     opt = torch.optim.Adam(agent.parameters(), lr=cfg.actor_lr, fused=True)
-    hist = {"imag_reward": [], "critic_loss": [], "log_std": [], "monitor_iters": [],
+    hist = {"imag_reward": [], "imag_return": [], "critic_loss": [], "log_std": [], "monitor_iters": [],
             "monitor_real_reward": []}
     with torch.no_grad():   # real start states are data: filter them once, not every update
         starts_h, starts_z = wm.warm(starts_obs, starts_act)
@@ -98,21 +180,14 @@ def train_in_imagination(wm, agent, starts_obs, starts_act, mean, std, cfg, gen:
         states, obs_pred, entropy = imagine(wm, agent, starts_h[idx], starts_z[idx], cfg.imag_horizon)
         rewards = reward_fn(obs_pred, mean, std)[0]                     # (H, B)
 
-        # Two stop-gradients keep the objectives apart. The critic regresses V(state) on the
-        # return, so it sees detached states (it must not steer the actor through them). The
-        # actor maximises the return, so the critic's bootstrap inside the return is detached
-        # (the actor must not learn by inflating the critic). The actor's gradient therefore
-        # arrives only along the imagined-reward path, through the frozen dynamics.
-        values = agent.value(states.detach())                                # (H+1, B)
-        returns = return_fn(rewards, values.detach(), cfg.gamma, cfg.lam)  # (H, B)
-        actor_loss = -(returns.mean() + cfg.ent_coef * entropy)
-        critic_loss = 0.5 * F.mse_loss(values[:-1], returns.detach())
+        actor_loss, critic_loss = loss_fn(agent, states, rewards, entropy, cfg.gamma, cfg.lam,
+                                          cfg.ent_coef)
         opt.zero_grad()
-        (actor_loss + critic_loss).backward()
-        nn.utils.clip_grad_norm_(agent.parameters(), 100.0)
+        set_gradients(agent, actor_loss, critic_loss)
         opt.step()
 
         hist["imag_reward"].append(rewards.mean().item())
+        hist["imag_return"].append(-(actor_loss.item() + cfg.ent_coef * entropy.item()))
         hist["critic_loss"].append(critic_loss.item())
         hist["log_std"].append(agent.log_std.mean().item())
         if log and (it % max(cfg.imag_iters // 5, 1) == 0 or it == cfg.imag_iters - 1):

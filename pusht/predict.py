@@ -22,6 +22,8 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 CHOICES = ("a", "b", "c")
+# Exercises with more options than the default three.
+EXERCISE_CHOICES = {"ex1": ("a", "b", "c", "d")}
 MIN_WORDS = 6
 
 
@@ -64,14 +66,21 @@ def _now() -> str:
     return datetime.now(timezone.utc).isoformat(timespec="milliseconds")
 
 
+def choices_of(exercise: str) -> tuple:
+    """The letters ``exercise`` accepts."""
+    return EXERCISE_CHOICES.get(exercise, CHOICES)
+
+
 def lock_prediction(exercise: str, choice: str, reason: str) -> Prediction:
-    """Record your prediction for ``exercise``: a choice (a, b or c) and one real sentence of why.
+    """Record your prediction for ``exercise``: a choice (a letter: a, b or c, for Exercise 1 also
+    d) and one real sentence of why.
 
     Raises ``ValueError`` with what is expected if the choice or the reason is not usable. The
     first valid lock is kept: calling again later prints the original receipt and changes nothing.
     """
-    if not isinstance(choice, str) or choice.strip().lower().strip("()") not in CHOICES:
-        raise ValueError(f"choice must be one of {', '.join(CHOICES)} (a single letter); got {choice!r}")
+    options = choices_of(exercise)
+    if not isinstance(choice, str) or choice.strip().lower().strip("()") not in options:
+        raise ValueError(f"choice must be one of {', '.join(options)} (a single letter); got {choice!r}")
     words = re.findall(r"[A-Za-z]{2,}", reason if isinstance(reason, str) else "")
     if len(words) < MIN_WORDS:
         raise ValueError(f"reason must be one real sentence (at least {MIN_WORDS} words) saying WHY "

@@ -111,3 +111,89 @@ def test_world_model_learns_to_reconstruct():
     assert recon.item() < 0.3 * first
     h, z, o = wm.step(*wm.warm(obs[:, :2], act[:, :1]), act[:, 1])
     assert h.shape == (16, 32) and z.shape == (16, 8) and o.shape == (16, 6)
+
+
+# --- how the critic reaches the actor (DreamerV1's wiring; the page's kept as a contrast) ----------
+def _dreams(seed=0):
+    """A small frozen model, an agent, and one batch of dreams with their rewards."""
+    from pusht.imagination import actor_critic_losses  # noqa: F401  (imported by the callers)
+    torch.manual_seed(seed)
+    wm = freeze(WorldModel(6, 2, latent_dim=8, hidden_dim=16, embed_dim=8))
+    agent = ActorCritic(16 + 8, 2, 16)
+    h, z = wm.warm(torch.randn(4, 3, 6), torch.randn(4, 2, 2).clamp(-1, 1))
+    return wm, agent, h, z
+
+
+def _actor_grads(wm, agent, h, z, wiring):
+    from pusht.imagination import losses_for, set_gradients
+
+    torch.manual_seed(1)                                          # the same action noise each time
+    states, obs_pred, entropy = imagine(wm, agent, h, z, horizon=5)
+    rewards = reward_from_obs(obs_pred, torch.zeros(6), torch.ones(6))[0]
+    actor_loss, critic_loss = losses_for(wiring)(agent, states, rewards, entropy, 0.99, 0.95, 3e-4)
+    agent.zero_grad()
+    set_gradients(agent, actor_loss, critic_loss, clip=1e9)
+    return [p.grad.clone() for p in [*agent.actor.parameters(), agent.log_std]], \
+           [p.grad.clone() for p in agent.critic.parameters()], critic_loss
+
+
+def _perturb_critic(agent):
+    with torch.no_grad():
+        for p in agent.critic.parameters():
+            p.add_(0.5 * torch.randn_like(p))
+
+
+@pytest.mark.parametrize("wiring, reaches", [("dreamer", True), ("page", False)])
+def test_the_critic_reaches_the_actor_only_under_dreamers_wiring(wiring, reaches):
+    wm, agent, h, z = _dreams()
+    before, _, _ = _actor_grads(wm, agent, h, z, wiring)
+    _perturb_critic(agent)
+    after, _, _ = _actor_grads(wm, agent, h, z, wiring)
+    same = all(torch.equal(a, b) for a, b in zip(before, after))
+    assert same is not reaches          # page: other critic weights, bit-identical actor gradient
+    assert all(p.grad is None and not p.requires_grad for p in wm.parameters())
+
+
+@pytest.mark.parametrize("wiring", ["dreamer", "page"])
+def test_each_loss_steps_only_its_own_parameters(wiring):
+    from pusht.imagination import losses_for
+
+    wm, agent, h, z = _dreams()
+    _, critic_grads, _ = _actor_grads(wm, agent, h, z, wiring)
+    # the critic's gradient is the critic loss's alone: recompute it with no actor loss at all
+    torch.manual_seed(1)
+    states, obs_pred, entropy = imagine(wm, agent, h, z, horizon=5)
+    rewards = reward_from_obs(obs_pred, torch.zeros(6), torch.ones(6))[0]
+    _, critic_loss = losses_for(wiring)(agent, states, rewards, entropy, 0.99, 0.95, 3e-4)
+    alone = torch.autograd.grad(critic_loss, list(agent.critic.parameters()))
+    for got, want in zip(critic_grads, alone):
+        torch.testing.assert_close(got, want, rtol=0, atol=0)
+    # ... and the critic loss pushes nothing into the actor (states and target are detached)
+    actor_side = torch.autograd.grad(critic_loss, [*agent.actor.parameters(), agent.log_std],
+                                     allow_unused=True)
+    assert all(g is None or g.abs().sum() == 0 for g in actor_side)
+
+
+def test_a_training_run_under_either_wiring_changes_only_the_agent():
+    from pusht.config import make_config
+    from pusht.imagination import train_in_imagination
+
+    wm, agent, _, _ = _dreams()
+    wm_before = [p.clone() for p in wm.parameters()]
+    for wiring in ("dreamer", "page"):
+        cfg = make_config(smoke=True, imag_iters=3, imag_batch=4, imag_horizon=4, critic_wiring=wiring)
+        hist = train_in_imagination(wm, agent, torch.randn(8, 3, 6), torch.rand(8, 2, 2) * 2 - 1,
+                                    torch.zeros(6), torch.ones(6), cfg, torch.Generator().manual_seed(0),
+                                    log=None)
+        assert np.isfinite(hist["imag_reward"]).all() and len(hist["imag_return"]) == 3
+    assert all(torch.equal(a, b) for a, b in zip(wm_before, wm.parameters()))
+
+
+def test_critic_wiring_is_validated_and_a_cli_flag():
+    from pusht.config import make_config
+    from pusht.dreamer import parse_config
+
+    with pytest.raises(ValueError, match="critic_wiring"):
+        make_config(critic_wiring="detached")
+    cfg, _ = parse_config(["--critic_wiring", "page", "--smoke"])
+    assert cfg.critic_wiring == "page" and make_config().critic_wiring == "dreamer"

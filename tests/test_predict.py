@@ -31,7 +31,7 @@ def test_lock_then_run_prints_receipts_in_order(capsys):
 
 
 @pytest.mark.parametrize("choice, reason, message", [
-    ("d", REASON, "choice must be one of a, b, c"),
+    ("e", REASON, "choice must be one of a, b, c, d"),
     ("", REASON, "choice must be one of"),
     (None, REASON, "choice must be one of"),
     ("b", "", "one real sentence"),
@@ -59,3 +59,10 @@ def test_reconcile_only_after_the_experiment(capsys):
     predict.run_exercise("ex1", lambda: None)
     predict.reconcile("ex1", "b", "It did.")
     assert "which matches your prediction" in capsys.readouterr().out
+
+
+def test_each_exercise_accepts_its_own_letters():
+    """Exercise 1 has four options, Exercise 2 three: a "d" is refused for ex2 only."""
+    with pytest.raises(ValueError, match="choice must be one of a, b, c;|one of a, b, c \\("):
+        predict.lock_prediction("ex2", "d", REASON)
+    assert predict.lock_prediction("ex1", "d", REASON).choice == "d"

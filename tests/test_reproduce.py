@@ -29,7 +29,7 @@ from pusht.dreamer import FLOAT_KEYS, platform_fingerprint, run
 ROOT = Path(__file__).resolve().parents[1]
 META = yaml.safe_load((ROOT / "meta.yaml").read_text())
 sys.path.insert(0, str(ROOT / "scripts"))
-from record_meta import (HEADLINE, acceptance, code_path, comparison_line, out_of_band,  # noqa: E402
+from record_meta import (COUNTS, HEADLINE, acceptance, code_path, comparison_line, out_of_band,  # noqa: E402
                          platform_differences, readme_with_results)
 
 
@@ -82,8 +82,9 @@ def test_the_fingerprint_records_what_decides_the_floats():
     here = platform_fingerprint()
     assert set(FLOAT_KEYS) <= set(here) and set(FLOAT_KEYS) <= set(META["platform"])
     assert "bit-exact" in comparison_line(META, META["platform"])
-    other = {**META["platform"], "cpu_vendor": "GenuineIntel"}
-    assert "tolerance" in comparison_line(META, other) and "GenuineIntel" in comparison_line(META, other)
+    vendor = "AuthenticAMD" if META["platform"]["cpu_vendor"] == "GenuineIntel" else "GenuineIntel"
+    other = {**META["platform"], "cpu_vendor": vendor}
+    assert "tolerance" in comparison_line(META, other) and vendor in comparison_line(META, other)
 
 
 def test_the_tolerance_bands_were_measured_on_the_recorded_code():
@@ -101,6 +102,10 @@ def test_the_tolerance_bands_can_fail():
     assert out_of_band(META["seeds"][0], META) == []
     for k in HEADLINE:
         seeds = [META["seeds"][s][k] for s in META["seeds"]]
+        if k in COUNTS:      # whole episodes: three seeds can land within a count or two of each other
+            continue
+        if k == "gap_drift_eval_horizon":   # the zero-action dream's 100-step drift ends at the model's
+            continue                        # fixed end point: nearly equal on every seed, by nature
         if max(seeds) > min(seeds):
             assert band[k] < max(seeds) - min(seeds), f"{k}: band {band[k]} spans the seeds {seeds}"
     moved = {**META["seeds"][0], "imagination_gap": META["seeds"][0]["imagination_gap"]
@@ -114,17 +119,30 @@ def test_recorded_runs_show_the_chapters_lesson(seed):
     assert m["imagination_gap"] > 0.05                                   # the dream is rosier
     assert m["real_success_rate"] == 0                                   # reality: never solved
     assert abs(m["real_final_tee_dist"] - m["spawn_tee_dist"]) <= 0.03   # the block barely moved
-    assert m["imagined_final_tee_dist"] <= 0.5 * m["real_final_tee_dist"]
-    assert m["imagined_reward_last20_train"] - m["imagined_reward_first20_train"] > 0.03
+    rise = m["imagined_reward_last20_train"] - m["imagined_reward_first20_train"]
+    assert rise > 2 * m["imagined_reward_rise_se"] > 0                   # beyond its own noise
+    # the split of the gap is an identity: its three terms add up to it, at both horizons
+    for span in ("train_horizon", "eval_horizon"):
+        parts = sum(m[f"gap_{t}_{span}"] for t in ("drift", "motion", "training"))
+        assert parts == pytest.approx(m[f"imagination_gap_{span}"], abs=1e-5)
+    # distribution shift: the expert never pins the pusher to a wall; the deployed policy does
+    assert m["expert_pusher_at_wall_share"] < m["real_pusher_at_wall_share"]
     # 3.1's finding: the model beats copy-last on the pusher, loses to it on the block.
     assert m["wm_one_step_ratio_agent_x"] < 1 and m["wm_one_step_ratio_agent_y"] < 1
     assert max(m[f"wm_one_step_ratio_{d}"] for d in ("tee_x", "tee_y", "sin(tee_yaw)", "cos(tee_yaw)")) > 1
     assert all(META["acceptance"][seed].values())
 
 
-@pytest.mark.parametrize("seed", [0, 1])
-def test_a_longer_dream_does_not_rescue_reality(seed):
-    for horizon in (5, 30):
-        m = META["horizon_sweep"][f"seed{seed}_h{horizon}"]
-        assert m["real_success_rate"] == 0 and m["imagination_gap"] > 0
+@pytest.mark.parametrize("horizon", [5, 15, 30])
+def test_a_longer_dream_does_not_rescue_reality(horizon):
+    runs = [m for name, m in META["horizon_sweep"].items() if name.startswith(f"h{horizon}_")]
+    assert len(runs) >= 2                                # several actor seeds: a spread to judge by
+    for m in runs:            # the gap itself moves with the horizon (Exercise 2); reality does not
+        assert m["real_success_rate"] == 0
         assert abs(m["real_final_tee_dist"] - m["spawn_tee_dist"]) <= 0.03
+
+
+def test_the_pages_wiring_is_recorded_beside_dreamers():
+    assert set(META["page_wiring"]) == set(META["seeds"])
+    for seed, m in META["page_wiring"].items():
+        assert m["real_success_rate"] == 0 and m["imagination_gap"] != META["seeds"][seed]["imagination_gap"]
