@@ -94,6 +94,10 @@ LAMBDA = Test("lambda_return_impl_tests", "03_imagination_actor", "lambda_return
     Case(_call({"t": [[2.0]]}, {"t": [[5.0], [7.0]]}, 0.5, 0.3), "horizon H = 1: expected [[5.5]]"),
     Case({"kind": "grad", "of": 0, "row": 0, "args": [{"t": [[0.0]] * 6, "grad": True}, {"t": [[0.0]] * 7}, 0.9, 0.5]},
          "the gradient flows into the rewards: dG_0/dr_k = (gamma * lam)^k (stay in torch)"),
+    Case({"kind": "grad", "of": 0, "args": [{"randn": [5, 3], "seed": 25, "fresh": True},
+                                           {"randn": [6, 3], "seed": 26, "fresh": True, "grad": True}, 0.9, 0.6]},
+         "the gradient flows into the values too (do not detach them): Dreamer's actor learns "
+         "through the critic's values inside this return"),
 ])
 
 

@@ -49,16 +49,18 @@ def _update(artists, obs):
 
 
 def animate_two_worlds(dream_obs, real_obs, every: int = 2, titles=("in the dream", "in the real sim"),
-                       dt: float = 0.1):
+                       dt: float = 0.1, dpi: int = 100):
     """Side-by-side animation of one start: the dream (left) and the real sim (right).
 
     ``dream_obs`` and ``real_obs`` are (T+1, 6) trajectories in metres. Returns a matplotlib
     ``FuncAnimation``; in a notebook show it with ``IPython.display.HTML(anim.to_jshtml())``.
+    Every embedded frame is a PNG of the figure at ``dpi``, so ``every`` and ``dpi`` set the size
+    of the page (a lower ``dpi`` keeps a saved notebook small).
     """
     import matplotlib.pyplot as plt
     from matplotlib.animation import FuncAnimation
 
-    fig, axes = plt.subplots(1, 2, figsize=(8, 4.2))
+    fig, axes = plt.subplots(1, 2, figsize=(8, 4.2), dpi=dpi)
     worlds = (np.asarray(dream_obs), np.asarray(real_obs))
     all_artists, texts = [], []
     for ax, traj, title in zip(axes, worlds, titles):

@@ -46,7 +46,11 @@ def render(q: Question, given: str = "") -> str:
 def ask(q: Question, given: str = "") -> None:
     """Show question ``q`` in a notebook, checked against ``given`` if a letter was typed."""
     try:
+        from IPython import get_ipython
         from IPython.display import Markdown, display
-        display(Markdown(render(q, given)))
-    except ImportError:                                   # outside Jupyter: plain text
-        print(render(q, given))
+        if get_ipython() is not None:
+            display(Markdown(render(q, given)))
+            return
+    except ImportError:
+        pass
+    print(render(q, given))                               # outside Jupyter: plain text

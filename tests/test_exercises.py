@@ -1,0 +1,193 @@
+"""Each implement-it exercise, end to end without nbgrader: the solution passes its visible and
+its hidden tests; plausible wrong versions pass the visible tests (shapes and a worked case) but
+fail the hidden ones, with a hint; delegating to the package's own implementation earns nothing,
+with a message saying why.
+
+The visible tests are the notebook's own test cell (its hidden block stripped), executed on the
+candidate; the hidden verdict is ``pusht.grading.submit`` in this process plus
+``autograde/checks.judge``, exactly what grading runs around a student's kernel.
+"""
+
+import json
+import sys
+from pathlib import Path
+
+import pytest
+import torch
+import torch.nn.functional as F
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "autograde"))
+
+import checks  # noqa: E402
+import pusht.grading as grading  # noqa: E402
+from pusht.agent import ActorCritic  # noqa: E402
+from pusht.config import make_config  # noqa: E402
+from pusht.evaluate import policy_of  # noqa: E402
+
+
+def cell(notebook: str, grade_id: str) -> str:
+    nb = json.loads((ROOT / "solutions" / f"{notebook}.ipynb").read_text())
+    (src,) = ["".join(c["source"]) for c in nb["cells"]
+              if c["metadata"].get("nbgrader", {}).get("grade_id") == grade_id]
+    return src
+
+
+def visible(src: str) -> str:
+    """A test cell as the student sees it: the hidden block removed."""
+    if "### END HIDDEN TESTS" in src:
+        src = src.split("### END HIDDEN TESTS", 1)[1]
+    return src
+
+
+def namespace(**functions) -> dict:
+    return {"torch": torch, "F": F, "cfg": make_config(), "ActorCritic": ActorCritic,
+            "policy_of": policy_of, **functions}
+
+
+def solution(notebook: str, grade_id: str, name: str, **extra):
+    ns = namespace(**extra)
+    exec(cell(notebook, grade_id), ns)
+    return ns[name]
+
+
+@pytest.fixture
+def grading_dir(tmp_path, monkeypatch):
+    (tmp_path / "cases").mkdir()
+    for t in checks.TESTS.values():
+        (tmp_path / "cases" / f"{t.test_id}.json").write_text(json.dumps([c.spec for c in t.cases]))
+    monkeypatch.setenv("PUSHT_GRADING_DIR", str(tmp_path))
+    return tmp_path
+
+
+def hidden(grading_dir, test, fn):
+    grading.submit(test.test_id, fn)
+    return checks.judge(test, grading_dir / "results" / f"{test.test_id}.npz")
+
+
+def run_visible(notebook, test_id, **functions):
+    exec(visible(cell(notebook, test_id)), namespace(**functions))
+
+
+# --- wrong but plausible versions -------------------------------------------------------------------
+def lambda_return_detached_values(rewards, values, gamma, lam):
+    """Right numbers, but the values' gradient is cut: Dreamer's actor would never hear the critic."""
+    values = values.detach()
+    out, last = [], values[-1]
+    for t in reversed(range(rewards.shape[0])):
+        last = rewards[t] + gamma * ((1 - lam) * values[t + 1] + lam * last)
+        out.append(last)
+    return torch.stack(out[::-1])
+
+
+def lambda_return_floats(rewards, values, gamma, lam):
+    """Right numbers through Python floats: nothing is differentiable any more."""
+    H, B = rewards.shape
+    out = [[0.0] * B for _ in range(H)]
+    for b in range(B):
+        last = float(values[-1, b].detach())
+        for t in reversed(range(H)):
+            r, v = float(rewards[t, b].detach()), float(values[t + 1, b].detach())
+            last = r + gamma * ((1 - lam) * v + lam * last)
+            out[t][b] = last
+    return torch.tensor(out)
+
+
+def losses_critic_steals(agent, states, rewards, entropy, gamma, lam, ent_coef, return_fn=None):
+    """The critic regresses on the live states: its loss pushes on the actor through the dream."""
+    values = agent.value(states)
+    returns = return_fn(rewards, values, gamma, lam)
+    return -(returns.mean() + ent_coef * entropy), 0.5 * F.mse_loss(values[:-1], returns.detach())
+
+
+def losses_moving_target(agent, states, rewards, entropy, gamma, lam, ent_coef, return_fn=None):
+    """The critic chases a target that is not detached."""
+    returns = return_fn(rewards, agent.value(states), gamma, lam)
+    return (-(returns.mean() + ent_coef * entropy),
+            0.5 * F.mse_loss(agent.value(states.detach())[:-1], returns))
+
+
+def dream_refilters(wm, policy, norm_obs0, horizon):
+    """Feeds its own decoded frame back through the posterior, as if it were a real frame."""
+    h, _ = wm._init(norm_obs0.shape[0])
+    z = wm.filter_step(h, norm_obs0)
+    hs, zs, acts = [h], [z], []
+    for _ in range(horizon):
+        a = policy(torch.cat([h, z], dim=-1))
+        h, _ = wm.img_step(h, z, a)
+        z = wm.filter_step(h, wm.decode(h, z))
+        hs.append(h), zs.append(z), acts.append(a)
+    return wm.decode(torch.stack(hs), torch.stack(zs)), torch.stack(acts)
+
+
+def dream_stale_latent(wm, policy, norm_obs0, horizon):
+    """Advances the memory h but keeps the start's latent z for every step."""
+    h, _ = wm._init(norm_obs0.shape[0])
+    z = wm.filter_step(h, norm_obs0)
+    hs, zs, acts = [h], [z], []
+    for _ in range(horizon):
+        a = policy(torch.cat([h, z], dim=-1))
+        h, _ = wm.img_step(h, z, a)
+        hs.append(h), zs.append(z), acts.append(a)
+    return wm.decode(torch.stack(hs), torch.stack(zs)), torch.stack(acts)
+
+
+def _with_return(fn, default_return):
+    """``fn`` as a learner writes it: the return function an optional 8th argument, theirs by default."""
+    def losses(agent, states, rewards, entropy, gamma, lam, ent_coef, return_fn=default_return):
+        return fn(agent, states, rewards, entropy, gamma, lam, ent_coef, return_fn=return_fn)
+    return losses
+
+
+# --- the exercises ------------------------------------------------------------------------------------
+def test_lambda_return(grading_dir):
+    test = checks.LAMBDA
+    good = solution("03_imagination_actor", "lambda_return_impl", "lambda_return")
+    run_visible("03_imagination_actor", "lambda_return_impl_tests", lambda_return=good)
+    assert hidden(grading_dir, test, good).passed
+    for wrong, hint in ((lambda_return_detached_values, "flows into the values"),
+                        (lambda_return_floats, "gradient")):
+        run_visible("03_imagination_actor", "lambda_return_impl_tests", lambda_return=wrong)
+        v = hidden(grading_dir, test, wrong)
+        assert not v.passed and hint in v.message, v.message
+
+
+def test_actor_critic_losses(grading_dir):
+    test = checks.LOSSES
+    lr = solution("03_imagination_actor", "lambda_return_impl", "lambda_return")
+    good = solution("03_imagination_actor", "losses_impl", "actor_critic_losses", lambda_return=lr)
+    run_visible("03_imagination_actor", "losses_impl_tests", actor_critic_losses=good)
+    assert hidden(grading_dir, test, good).passed
+    from pusht.imagination import page_losses
+
+    page = _with_return(page_losses, lr)       # the chapter page's wiring, as a learner would write it
+    for wrong, hint in ((page, "page's wiring"), (_with_return(losses_critic_steals, lr), "imagined states"),
+                        (_with_return(losses_moving_target, lr), "no gradient")):
+        run_visible("03_imagination_actor", "losses_impl_tests", actor_critic_losses=wrong)
+        v = hidden(grading_dir, test, wrong)
+        assert not v.passed and hint in v.message, v.message
+
+
+def test_dream(grading_dir):
+    test = checks.DREAM
+    good = solution("04_imagination_gap", "dream_impl", "dream")
+    run_visible("04_imagination_gap", "dream_impl_tests", dream=good)
+    assert hidden(grading_dir, test, good).passed
+    for wrong in (dream_refilters, dream_stale_latent):
+        run_visible("04_imagination_gap", "dream_impl_tests", dream=wrong)
+        v = hidden(grading_dir, test, wrong)
+        assert not v.passed and "first failure" in v.message, v.message
+
+
+@pytest.mark.parametrize("test", list(checks.TESTS.values()), ids=list(checks.TESTS))
+def test_delegating_to_the_package_earns_nothing_and_says_why(grading_dir, test):
+    module, name = test.reference.split(":")
+    src = f"from {module} import {name} as _theirs\n\ndef {test.function}(*args, **kw):\n    return _theirs(*args, **kw)\n"
+    found = checks.delegations(test, [{"cell_type": "code", "source": src, "metadata": {}}], set())
+    assert found
+    v = checks.judge(test, grading_dir / "results" / "none.npz", delegation=found)
+    assert not v.passed and "no credit" in v.message and "write it yourself" in v.message
+    ns = {}
+    exec(src, ns)                                       # and the probes refuse to run it anyway
+    v = hidden(grading_dir, test, ns[test.function])
+    assert not v.passed and "ReferenceRefused" in v.message
