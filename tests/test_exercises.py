@@ -191,3 +191,33 @@ def test_delegating_to_the_package_earns_nothing_and_says_why(grading_dir, test)
     exec(src, ns)                                       # and the probes refuse to run it anyway
     v = hidden(grading_dir, test, ns[test.function])
     assert not v.passed and "ReferenceRefused" in v.message
+
+
+# --- the reward (notebook 02) ----------------------------------------------------------------------------
+def _reward_notebook_globals():
+    """What notebook 02 defines before its test cell: the data's MEAN/STD and its to_norm."""
+    from pusht.env import ANG_SCALE, POS_SCALE
+    from pusht.nb import reward as nb02
+
+    MEAN = torch.tensor([0.01, -0.02, 0.03, 0.0, 0.1, 0.2])
+    STD = torch.tensor([0.2, 0.2, 0.15, 0.15, 0.7, 0.7])
+    return {"MEAN": MEAN, "STD": STD, "POS_SCALE": POS_SCALE, "ANG_SCALE": ANG_SCALE,
+            "to_norm": lambda obs_m: nb02.to_norm(obs_m, MEAN, STD)}
+
+
+def test_reward(grading_dir):
+    test = checks.REWARD
+    g = _reward_notebook_globals()
+    good = solution("02_reward", "reward_impl", "reward_from_obs", **g)
+    run_visible("02_reward", "reward_impl_tests", reward_from_obs=good, **g)
+    assert hidden(grading_dir, test, good).passed
+    # Plausible slips the visible tests cannot see: the notebook's own MEAN or STD used in place of
+    # the arguments (the visible tests pass exactly those; the grader passes others).
+    source = cell("02_reward", "reward_impl")
+    for wrong_line in ("obs = norm_obs * std + MEAN", "obs = norm_obs * STD + mean"):
+        ns = namespace(**g)
+        exec(source.replace("obs = norm_obs * std + mean", wrong_line), ns)
+        wrong = ns["reward_from_obs"]
+        run_visible("02_reward", "reward_impl_tests", reward_from_obs=wrong, **g)
+        v = hidden(grading_dir, test, wrong)
+        assert not v.passed and "first failure" in v.message, v.message
