@@ -45,3 +45,19 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
     if any(Path(str(item.fspath)).name == "test_reproduce.py" for item in terminalreporter.stats.get(
             "passed", []) + terminalreporter.stats.get("failed", [])):
         terminalreporter.write_line(pytest_report_header(config))
+
+
+@pytest.fixture
+def grading_dir(tmp_path, monkeypatch):
+    """A grading folder holding every hidden test's probe cases, as the grader writes it, and
+    ``PUSHT_GRADING_DIR`` pointing at it (so ``pusht.grading.submit`` records results there)."""
+    import json
+
+    sys.path.insert(0, str(ROOT / "autograde"))
+    import checks
+
+    (tmp_path / "cases").mkdir()
+    for t in checks.TESTS.values():
+        (tmp_path / "cases" / f"{t.test_id}.json").write_text(json.dumps([c.spec for c in t.cases]))
+    monkeypatch.setenv("PUSHT_GRADING_DIR", str(tmp_path))
+    return tmp_path

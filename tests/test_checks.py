@@ -22,15 +22,6 @@ import pusht.grading as grading  # noqa: E402
 from pusht.reward import reward_from_obs as package_reward  # noqa: E402
 
 
-@pytest.fixture
-def grading_dir(tmp_path, monkeypatch):
-    (tmp_path / "cases").mkdir()
-    for t in checks.TESTS.values():
-        (tmp_path / "cases" / f"{t.test_id}.json").write_text(json.dumps([c.spec for c in t.cases]))
-    monkeypatch.setenv("PUSHT_GRADING_DIR", str(tmp_path))
-    return tmp_path
-
-
 def verdict(grading_dir, test, fn):
     grading.submit(test.test_id, fn)
     return checks.judge(test, grading_dir / "results" / f"{test.test_id}.npz")

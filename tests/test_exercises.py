@@ -51,15 +51,6 @@ def solution(notebook: str, grade_id: str, name: str, **extra):
     return ns[name]
 
 
-@pytest.fixture
-def grading_dir(tmp_path, monkeypatch):
-    (tmp_path / "cases").mkdir()
-    for t in checks.TESTS.values():
-        (tmp_path / "cases" / f"{t.test_id}.json").write_text(json.dumps([c.spec for c in t.cases]))
-    monkeypatch.setenv("PUSHT_GRADING_DIR", str(tmp_path))
-    return tmp_path
-
-
 def hidden(grading_dir, test, fn):
     grading.submit(test.test_id, fn)
     return checks.judge(test, grading_dir / "results" / f"{test.test_id}.npz")

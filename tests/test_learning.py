@@ -116,7 +116,6 @@ def test_world_model_learns_to_reconstruct():
 # --- how the critic reaches the actor (DreamerV1's wiring; the page's kept as a contrast) ----------
 def _dreams(seed=0):
     """A small frozen model, an agent, and one batch of dreams with their rewards."""
-    from pusht.imagination import actor_critic_losses  # noqa: F401  (imported by the callers)
     torch.manual_seed(seed)
     wm = freeze(WorldModel(6, 2, latent_dim=8, hidden_dim=16, embed_dim=8))
     agent = ActorCritic(16 + 8, 2, 16)
