@@ -154,7 +154,56 @@ DREAM = Test("dream_impl_tests", "04_imagination_gap", "dream", "pusht.evaluate:
          "works without autograd (under torch.inference_mode), for B = 1 and horizon = 1"),
 ])
 
-TESTS = {t.test_id: t for t in (REWARD, LAMBDA, LOSSES, DREAM)}
+def _members(*blocks, rest=(0.0, 0.0, 0.0, 1.0)):
+    """Frames (K, 1, 6) of K members that put the block centre at ``blocks`` (metres when std = 1),
+    all with the same pusher (x, y) and yaw (sin, cos) ``rest``."""
+    return {"t": [[[rest[0], rest[1], x, y, rest[2], rest[3]]] for x, y in blocks]}
+
+
+# Members that agree on the block but not on the pusher or the yaw, next to members that disagree on
+# everything; dyadic values, so any sound formula for the variance gives exactly 0 where they agree.
+_BLOCK_ONLY = {"t": [[[0.5, -0.25, 0.125, 0.75, 0.0, 1.0], [0.5, 0.5, 0.25, -0.5, 1.0, 0.0]],
+                     [[-1.0, 0.75, 0.125, 0.75, 1.0, 0.0], [0.5, 0.5, -0.25, 0.5, 0.0, 1.0]],
+                     [[0.25, 2.0, 0.125, 0.75, -1.0, 0.5], [0.5, 0.5, 0.5, 0.0, 0.5, 0.5]]]}
+_AGREE = {"t": [[[0.5, -0.25, 0.125, 0.75, 0.0, 1.0]] * 4] * 3, "grad": True}           # (3, 4, 6)
+_BLOCK_STD = {"t": [0.2, 0.2, 0.15, 0.15, 0.7, 0.7]}                                     # the data's kind
+_OTHER_STD = {"t": [3.0, 0.01, 0.15, 0.15, 7.0, 0.002]}                                  # same std[2:4]
+DISAGREE = Test("block_disagreement_impl_tests", "06_closing_the_gap", "block_disagreement",
+                "pusht.ensemble:block_disagreement", [
+    Case(_call(_members((0.1, 0.2), (0.4, 0.6)), ONE6),
+         "the hand-worked case: two members whose block centres are 0.5 m apart disagree by 0.25 "
+         "(half the distance): sqrt(var_x + var_y) with POPULATION variances across the K members "
+         "(divide by K, not K - 1: the members are the whole ensemble, not a sample)"),
+    Case(_call(_BLOCK_ONLY, ONE6),
+         "only the block centre (dims 2:4) counts: members that differ on the pusher or the T's angle "
+         "but put the block in the same place disagree by 0"),
+    Case(_call({"randn": [3, 15, 64, 6], "seed": 61, "fresh": True}, ODD_STD),
+         "the training's shapes (K, H, B, D) = (3, 15, 64, 6) with a normalisation std: the answer is "
+         "in metres, so scale the block's normalised (x, y) by their own std (std[2:4]) before the "
+         "spread is taken (a variance scales with std squared)"),
+    Case(_call({"randn": [3, 8, 6], "seed": 62, "fresh": True}, _OTHER_STD),
+         "the std of the other dims (pusher, yaw) must not change the result: only std[2:4] enters"),
+    Case(_call({"randn": [4, 9, 6], "seed": 63, "fresh": True}, _BLOCK_STD),
+         "K = 4 members: population variance, the mean squared distance from the members' mean "
+         "(divide by K, not K - 1)"),
+    Case(_call(_members((0.3, -0.2)), ONE6),
+         "a single member (K = 1) has nothing to disagree with: 0, not NaN (a sample variance would "
+         "divide by K - 1 = 0)"),
+    Case(_call({"randn": [5, 2, 3, 4, 6], "seed": 64, "fresh": True}, ODD_STD),
+         "any leading shape: frames (K, 2, 3, 4, D) give (2, 3, 4); reduce over the members (dim 0) "
+         "and the block's two coordinates only"),
+    Case(_call({"randn": [3, 6], "seed": 65, "fresh": True}, ODD_STD),
+         "frames (K, D) of one state give a scalar, shape ()"),
+    Case({"kind": "grad", "of": 0, "args": [{"randn": [3, 7, 6], "seed": 66, "fresh": True, "grad": True},
+                                           ODD_STD]},
+         "the gradient flows into the frames (stay in torch: no .item(), numpy or detach), with the "
+         "right values, and only into the block's dims (2:4)"),
+    Case({"kind": "grad", "of": 0, "args": [_AGREE, _BLOCK_STD]},
+         "where all members agree the disagreement is 0 and its gradient must be finite, here 0, "
+         "not NaN: the square root's slope is infinite at 0, so do not take it there"),
+])
+
+TESTS = {t.test_id: t for t in (REWARD, LAMBDA, LOSSES, DREAM, DISAGREE)}
 GUARD_WORDS = ("pusht.grading", "PUSHT_GRADING", "_PROBING", "__pusht_reference__", "__wrapped__",
                "ReferenceRefused")
 

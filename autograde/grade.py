@@ -14,10 +14,12 @@ Student code is untrusted. What happens, per student:
    graded cells matched back to the instructor's (by id or content) and deleted test cells put
    back; the prediction receipts are checked; the student's own cells are checked for calls to
    the package's implementation of what they were asked to write (``checks.delegations``);
-3. the student is graded in a private copy of the course (in a temporary folder), one notebook at
-   a time by nbgrader, in a kernel confined by ``sandbox.py`` (bubblewrap: the student's own
-   working folder and nothing else of the course, no network, resource and wall-clock limits,
-   every process killed when the notebook is done). A failure in one notebook costs only that
+3. the student is graded in a private copy of the course (in a temporary folder), by nbgrader,
+   in kernels confined by ``sandbox.py`` (bubblewrap: the student's own working folder and
+   nothing else of the course, no network, resource and wall-clock limits, a throw-away uid,
+   every process killed when the notebook is done). ``--jobs`` tasks run at once (default: one
+   per core); with fewer students than jobs, each student's notebooks are split over several
+   tasks, so even one student keeps every core busy. A failure in one notebook costs only that
    notebook;
 4. the test cells' verdicts are made here, outside the kernel, from the raw numbers the kernel
    recorded (``checks.judge``), so nothing the student's code does in the kernel can forge them;
@@ -40,6 +42,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import time
 import warnings
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -61,7 +64,7 @@ ASSIGNMENT = COURSE["assignment"]
 COURSE_ID = "zero2robot-ch3.2"      # the same as in nbgrader_config.py
 NOTEBOOKS = sorted(p.name for p in (ROOT / "solutions").glob("*.ipynb"))
 # The completion task cell of each predict-then-run exercise: "<ex>_order".
-EXERCISES = {"ex1": "04_imagination_gap", "ex2": "05_horizon"}
+EXERCISES = {"ex1": "04_imagination_gap", "ex2": "05_horizon", "ex3": "06_closing_the_gap"}
 FEEDBACK_OUTPUT_CHARS = 20_000      # per output in a feedback page; the rest is cut with a note
 FEEDBACK_NOTEBOOK_CHARS = 2_000_000  # all outputs of one notebook together
 HIDDEN_NOTE = "# (hidden tests: run by the grader; their verdict is printed below)\n"
@@ -69,7 +72,8 @@ HIDDEN_NOTE = "# (hidden tests: run by the grader; their verdict is printed belo
 
 def tool_env() -> dict:
     """nbgrader shells out to `alembic`: make this interpreter's scripts folder visible."""
-    return {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}"}
+    here, path = str(Path(sys.executable).parent), os.environ.get("PATH", "")
+    return {**os.environ, "PATH": path if here in path.split(os.pathsep) else f"{here}{os.pathsep}{path}"}
 
 
 def nbgrader(course: Path, *args: str, timeout: int | None = None) -> subprocess.CompletedProcess:
@@ -88,9 +92,39 @@ def prepare_course(course: Path) -> None:
         shutil.copy(path, src / path.name)
     if course.resolve() != HERE:
         shutil.copy(HERE / "nbgrader_config.py", course / "nbgrader_config.py")
-    proc = nbgrader(course, "generate_assignment", ASSIGNMENT, "--force")
-    if proc.returncode != 0:
-        sys.exit(f"nbgrader generate_assignment failed:\n{proc.stderr[-3000:]}")
+    res = nbgrader_api(course).generate_assignment(ASSIGNMENT, force=True)
+    if not res.get("success"):
+        sys.exit(f"nbgrader generate_assignment failed:\n{(res.get('error') or res.get('log') or '')[-3000:]}")
+
+
+def nbgrader_api(course: Path):
+    """nbgrader's own Python API (``NbGraderAPI``) on ``course``, in this process.
+
+    The same steps as the ``nbgrader`` command, without a new interpreter each: one import of
+    nbgrader serves the whole batch (an import cost 2.5 s on the recording host; see
+    benchmarks/grading_wallclock.txt).
+    """
+    from nbgrader.apps import NbGraderAPI
+    from nbgrader.coursedir import CourseDirectory
+    from traitlets.config import PyFileConfigLoader
+
+    os.environ["PATH"] = tool_env()["PATH"]     # a new gradebook runs the venv's `alembic`
+    config = PyFileConfigLoader("nbgrader_config.py", path=str(course)).load_config()
+    config.CourseDirectory.root = str(course)
+    config.CourseDirectory.db_url = f"sqlite:///{course / 'gradebook.db'}"
+    return NbGraderAPI(coursedir=CourseDirectory(config=config), config=config)
+
+
+def export_csv(course: Path, filename: Path) -> None:
+    """``nbgrader export`` (its CSV plugin) of the course gradebook into ``filename``, in this process."""
+    from nbgrader.api import Gradebook
+    from nbgrader.plugins import CsvExportPlugin
+    from traitlets.config import Config
+
+    config = Config()
+    config.CsvExportPlugin.to = str(filename)      # the plugin's destination trait is `to`
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
+        CsvExportPlugin(config=config).export(gb)
 
 
 # --- per student: repair, then grade in a private course ----------------------------------------
@@ -176,9 +210,11 @@ def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | Non
         coursedir = CourseDirectory(config=config)
         coursedir.notebook_id = nb_id
         api = NbGraderAPI(coursedir=coursedir, config=config)
+        started = time.perf_counter()
         res = api.autograde(ASSIGNMENT, student, force=True, create=True)
         entry = {"ok": bool(res.get("success")), "error": "" if res.get("success") else
-                 _last_error(res.get("error", "") or res.get("log", "")), "scores": {}, "verdicts": {}}
+                 _last_error(res.get("error", "") or res.get("log", "")), "scores": {}, "verdicts": {},
+                 "seconds": round(time.perf_counter() - started, 2)}   # nbgrader's autograde, kernel included
         if entry["ok"]:
             with Gradebook(config.CourseDirectory.db_url, course_id=COURSE_ID) as gb:
                 sub = gb.find_submission_notebook(nb_id, ASSIGNMENT, student)
@@ -229,9 +265,8 @@ def grade_student(course: Path, student: str, notebooks: dict, timeout: int, con
             result = {name: {"ok": False, "error": _last_error(stderr), "scores": {}, "verdicts": {}}
                       for name in notebooks}
         src = priv / "autograded" / student / ASSIGNMENT
-        dest = course / "autograded" / student / ASSIGNMENT
-        shutil.rmtree(dest, ignore_errors=True)
-        dest.mkdir(parents=True)
+        dest = course / "autograded" / student / ASSIGNMENT     # emptied once per student by grade_class
+        dest.mkdir(parents=True, exist_ok=True)
         for name in notebooks:
             if (src / name).exists():
                 shutil.copy(src / name, dest / name)
@@ -280,16 +315,32 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
 
     from tqdm.auto import tqdm
 
-    results = {}
+    # Each task grades some of one student's notebooks in its own private course and throw-away uid.
+    # With at least as many students as cores, one task per student (the notebooks of a task run
+    # one after another and share its stage cache); with fewer, each student's notebooks are split
+    # into that many tasks, so the cores stay busy even for one student. Only this process writes
+    # the course gradebook (``record``).
+    students = [s for s in order if prepared[s]]
+    groups = max(1, jobs // max(1, len(students)))
+    tasks = []
+    for s in students:
+        names = sorted(prepared[s])
+        for g in range(min(groups, len(names))):
+            tasks.append((s, names[g::groups]))          # 01, 03, 05 | 02, 04, 06 for two groups
+        shutil.rmtree(course / "autograded" / s / ASSIGNMENT, ignore_errors=True)
+    results, left = {}, {s: sum(1 for t in tasks if t[0] == s) for s in students}
     with ThreadPoolExecutor(jobs) as pool:
-        futures = {pool.submit(grade_student, course, s, prepared[s], timeout, confine, i, limits): s
-                   for i, s in enumerate(order) if prepared[s]}
-        with tqdm(total=len(futures), desc=f"grading ({jobs} at a time)", unit="student",
+        futures = {pool.submit(grade_student, course, s, {n: prepared[s][n] for n in names}, timeout, confine,
+                               i, limits): (s, names) for i, (s, names) in enumerate(tasks)}
+        with tqdm(total=len(left), desc=f"grading ({jobs} at a time)", unit="student",
                   disable=not progress) as bar:
             for f in as_completed(futures):
-                results[futures[f]] = f.result()
-                bar.set_postfix_str(futures[f][:20])
-                bar.update()
+                s, _ = futures[f]
+                results.setdefault(s, {}).update(f.result())
+                left[s] -= 1
+                if not left[s]:                  # the bar counts students: all their tasks done
+                    bar.set_postfix_str(s[:20])
+                    bar.update()
     with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
         for s in report:
             gb.update_or_create_student(s)
@@ -300,7 +351,9 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
         gb.db.commit()
     record(course, report, results)
     sanitize_feedback_sources(course, report)
-    nbgrader(course, "generate_feedback", ASSIGNMENT, "--force")
+    res = nbgrader_api(course).generate_feedback(ASSIGNMENT, force=True)
+    if not res.get("success"):
+        log(f"nbgrader generate_feedback failed: {_last_error(res.get('error') or res.get('log') or '')}")
     export(course, report, got.rejected)
     return report
 
@@ -431,7 +484,7 @@ def _cap_outputs(cell, budget: int) -> int:
 
 def export(course: Path, report: dict, rejected: list[str] = ()) -> None:
     """grades.csv (nbgrader's export of the gradebook) and report.csv (what happened to each file)."""
-    nbgrader(course, "export", f"--CsvExportPlugin.filename={course / 'grades.csv'}")
+    export_csv(course, course / "grades.csv")
     from nbgrader.api import Gradebook, MissingEntry
 
     with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb, \
@@ -463,7 +516,7 @@ def main(argv=None) -> int:
     p.add_argument("submissions", type=Path, help="a .zip from the LMS, or a folder of notebooks")
     p.add_argument("--course", type=Path, default=HERE, help="nbgrader course folder (default: autograde/)")
     p.add_argument("--timeout", type=int, default=120, help="seconds per cell before it is interrupted")
-    p.add_argument("--jobs", type=int, default=None, help="students graded at once (default: one per core)")
+    p.add_argument("--jobs", type=int, default=None, help="grading tasks at once (default: one per core); fewer students than that split their notebooks")
     p.add_argument("--no-confine", action="store_true",
                    help="run student code unconfined (only for trusted notebooks; prints a warning)")
     args = p.parse_args(argv)

@@ -48,7 +48,7 @@ def set_manual_grade(student: str, notebook: str, grade_id: str, score: float, c
         w.writeheader()
         w.writerows(sorted(rows, key=lambda r: (r["student_id"], r["notebook"], r["grade_id"])))
     nbgrader(course, "generate_feedback", ASSIGNMENT, "--force", f"--student={student}")
-    nbgrader(course, "export", f"--CsvExportPlugin.filename={course / 'grades.csv'}")
+    nbgrader(course, "export", f"--to={course / 'grades.csv'}")
 
 
 def main(argv=None) -> int:

@@ -28,8 +28,8 @@ LOCK_RE = re.compile(r"^\[prediction (?P<again>already )?locked\] (?P<ex>ex\d): 
 RUN_RE = re.compile(r"^\[experiment started\] (?P<ex>ex\d) at (?P<at>\S+) \(prediction locked at (?P<locked>\S+)\)$")
 ANY_RECEIPT = re.compile(r"\[(prediction (already )?locked|experiment started)\] ex\d")
 # Calls that run (part of) an exercise's experiment without run_exercise.
-EXPERIMENT_CALLS = {"run", "run_seed", "two_world_eval", "experiment_ex1", "experiment_ex2",
-                    "imagination_stage", "train_in_imagination"}
+EXPERIMENT_CALLS = {"run", "run_seed", "two_world_eval", "experiment_ex1", "experiment_ex2", "experiment_ex3",
+                    "run_loop", "imagination_stage", "train_in_imagination"}
 
 
 def source(cell) -> str:

@@ -2,9 +2,11 @@
 
     python benchmarks/bench_grading.py [--executed DIR] [--repeats 1]
 
-Executes the five solution notebooks in smoke mode (or reuses ``--executed``), zips them as one
+Executes the solution notebooks in smoke mode (or reuses ``--executed``), zips them as one
 student's upload, and times ``grade.grade_class`` on it in a fresh course folder, once with the
-bubblewrap sandbox and once without. Prints one line per run; the figures belong to this host.
+bubblewrap sandbox and once without. Prints one line per run, then where the confined run's time
+went (the course's nbgrader steps, and each notebook's nbgrader autograde, kernel included, which
+run ``--jobs`` at a time); the figures belong to this host.
 """
 
 from __future__ import annotations
@@ -45,6 +47,23 @@ def main(argv=None) -> int:
         for name, data in build(executed).items():
             if name.startswith("perfect_"):
                 zf.writestr(name, data)
+    phases = {}
+
+    def timed(name, fn):
+        def wrapper(*a, **k):
+            t = time.perf_counter()
+            out = fn(*a, **k)
+            phases[name] = phases.get(name, 0.0) + time.perf_counter() - t
+            if name == "grade_student":
+                for nb, entry in out.items():
+                    phases[f"  autograde {nb} (nbgrader, kernel included)"] = entry.get("seconds", float("nan"))
+            return out
+        return wrapper
+
+    for name in ("prepare_course", "grade_student", "record", "sanitize_feedback_sources", "export"):
+        setattr(grade, name, timed(name, getattr(grade, name)))
+    api = grade.nbgrader_api
+    grade.nbgrader_api = lambda course: _timed_api(api(course), phases)
     modes = [True, False] if sandbox.available()[0] else [False]
     print(f"host: {platform.processor() or platform.machine()}, {sys.platform}, python {platform.python_version()}")
     for _ in range(args.repeats):
@@ -57,7 +76,26 @@ def main(argv=None) -> int:
             score = sum(v[0] for v in report["perfect"]["verdicts"].values())
             print(f"one complete submission, {'confined' if confine else 'NOT confined'}: {seconds:.1f} s "
                   f"(test points {score:g})", flush=True)
+            if confine or len(modes) == 1:
+                print("  where it went (grade_student: summed over notebooks, which run in parallel):")
+                for name, sec in phases.items():
+                    print(f"  {sec:7.1f} s  {name}")
+            phases.clear()
     return 0
+
+
+def _timed_api(api, phases):
+    """Wrap an NbGraderAPI so that generate_assignment / generate_feedback are timed."""
+    for name in ("generate_assignment", "generate_feedback"):
+        fn = getattr(api, name)
+
+        def wrapper(*a, _fn=fn, _name=name, **k):
+            t = time.perf_counter()
+            out = _fn(*a, **k)
+            phases[f"nbgrader {_name}"] = phases.get(f"nbgrader {_name}", 0.0) + time.perf_counter() - t
+            return out
+        setattr(api, name, wrapper)
+    return api
 
 
 if __name__ == "__main__":

@@ -47,6 +47,8 @@ class Config:
     """Adam learning rate of the world model."""
     batch_size: int = 32
     """Sequences per world-model update."""
+    wm_predicts: str = "state"
+    """What the world model decodes: "state" (the normalised frame) or "delta" (its change since the last)."""
 
     # --- learning in imagination (page: actor_lr, imag_iters) ----------------------------------
     context: int = 2
@@ -77,6 +79,30 @@ class Config:
     monitor_episodes: int = 10
     """Real starts per monitoring point (disjoint from the evaluation starts)."""
 
+    # --- an ensemble of world models and MOPO's disagreement penalty (ensemble.py) ---------------
+    ensemble_size: int = 1
+    """World models trained on the same data, member k seeded seed + 1000 k (1: the chapter's single model)."""
+    disagreement_penalty: float = 0.0
+    """Imagined reward minus this times the members' disagreement on the block position, in metres."""
+
+    # --- the real-data loop of notebook 06 (loop.py) ----------------------------------------------
+    loop_rounds: int = 3
+    """Rounds of collect-model-behave after the offline run (round 0)."""
+    loop_episodes: int = 60
+    """Real episodes the current policy runs per round, each from a fresh start."""
+    loop_episode_len: int = 100
+    """Steps per collected episode (10 s, the evaluation's length), cut into seq_len clips."""
+    loop_noise: float = 0.3
+    """Std of the Gaussian noise added to the policy's actions while collecting (actions live in [-1, 1])."""
+    loop_wm: str = "continue"
+    """Each round: "continue" training the world model on all data so far, or "retrain" a fresh one."""
+    loop_wm_epochs: int = 10
+    """Passes over all data per round when the world model continues."""
+    loop_actor: str = "continue"
+    """Each round: "continue" training the actor-critic in the new model, or "retrain" a fresh one."""
+    loop_imag_iters: int = 200
+    """Actor-critic updates per round when the actor continues."""
+
     # --- evaluation: the same policy in two worlds (page: 30 held-out starts) ------------------
     eval_episodes: int = 30
     """Held-out starts, never seen in training data."""
@@ -106,6 +132,28 @@ class Config:
             raise ValueError(f"ent_coef must be 0 or more, got {self.ent_coef}")
         if self.critic_wiring not in ("dreamer", "page"):
             raise ValueError(f"critic_wiring must be 'dreamer' or 'page', got {self.critic_wiring!r}")
+        if self.wm_predicts not in ("state", "delta"):
+            raise ValueError(f"wm_predicts must be 'state' or 'delta', got {self.wm_predicts!r}")
+        if not isinstance(self.ensemble_size, int) or self.ensemble_size < 1:
+            raise ValueError(f"ensemble_size must be a whole number, at least 1, got {self.ensemble_size!r}")
+        if not self.disagreement_penalty >= 0:
+            raise ValueError(f"disagreement_penalty must be 0 or more, got {self.disagreement_penalty}")
+        if self.disagreement_penalty > 0 and self.ensemble_size < 2:
+            raise ValueError(f"disagreement_penalty ({self.disagreement_penalty}) needs ensemble_size of "
+                             f"2 or more: one model has no disagreement to penalise")
+        for name in ["loop_episodes", "loop_episode_len", "loop_wm_epochs", "loop_imag_iters"]:
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} must be at least 1, got {getattr(self, name)}")
+        if self.loop_rounds < 0:
+            raise ValueError(f"loop_rounds must be 0 or more, got {self.loop_rounds}")
+        if not 0 <= self.loop_noise < 10:
+            raise ValueError(f"loop_noise must be in [0, 10), got {self.loop_noise}")
+        for name in ["loop_wm", "loop_actor"]:
+            if getattr(self, name) not in ("continue", "retrain"):
+                raise ValueError(f"{name} must be 'continue' or 'retrain', got {getattr(self, name)!r}")
+        if self.loop_episode_len < self.seq_len:
+            raise ValueError(f"loop_episode_len ({self.loop_episode_len}) must be at least seq_len ({self.seq_len}): "
+                             f"collected episodes are cut into clips of seq_len steps")
         if self.context >= self.seq_len:
             raise ValueError(f"context ({self.context}) must be shorter than seq_len ({self.seq_len})")
 
@@ -121,7 +169,8 @@ class Config:
 # A run of a few seconds that still exercises every stage. Applied by --smoke before any flag the
 # user gave explicitly.
 SMOKE = dict(n_episodes=40, n_val_episodes=10, wm_epochs=3, imag_iters=20, imag_batch=16,
-             monitor_every=10, monitor_episodes=3, eval_episodes=4, eval_horizon=20)
+             monitor_every=10, monitor_episodes=3, eval_episodes=4, eval_horizon=20,
+             loop_rounds=2, loop_episodes=6, loop_episode_len=32, loop_wm_epochs=2, loop_imag_iters=10)
 
 
 def make_config(smoke: bool = False, **overrides) -> Config:

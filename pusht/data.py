@@ -23,6 +23,7 @@ TRAIN_SEED_BASE = 0               # + run_seed * 1_000_000 + i
 VAL_SEED_BASE = 500_000           # + run_seed * 1_000_000 + i
 EVAL_SEED_BASE = 1_000_000_000    # + run_seed * 100_000 + episode
 MONITOR_SEED_BASE = 2_000_000_000  # + run_seed * 100_000 + episode
+LOOP_SEED_BASE = 3_000_000_000     # + run_seed * 100_000 + i: starts of the real-data loop (loop.py)
 
 
 def start_seeds(base: int, run_seed: int, n: int) -> list[int]:

@@ -31,12 +31,13 @@ from .agent import ActorCritic
 from .analysis import shift_metrics
 from .config import Config, field_docs, make_config
 from .data import EVAL_SEED_BASE, MONITOR_SEED_BASE, load_expert_data, start_seeds
+from .ensemble import EnsembleWorldModel, disagreement_metrics, ensemble_history
 from .env import ACT_DIM, OBS_DIM, OBS_NAMES
 from .evaluate import policy_of, real_rollout, two_world_eval
 from .imagination import WIRINGS, freeze, lambda_return, train_in_imagination
 from .record import RERUN_MISSING, record_rerun, rerun_available
 from .reward import reward_from_obs
-from .world_model import WorldModel, prediction_error_vs_copy_last, train_world_model
+from .world_model import PREDICTS, WorldModel, prediction_error_vs_copy_last, train_world_model
 
 # Metric keys the chapter page records, in its order.
 PAGE_KEYS = ["eval_episodes", "eval_horizon", "final_imagined_reward_per_step_train", "gamma",
@@ -86,13 +87,15 @@ class RunResult:
 
 # Which config fields each stage depends on: the key of its on-disk cache.
 WM_FIELDS = ("seed", "device", "threads", "n_episodes", "seq_len", "n_val_episodes", "latent_dim",
-             "hidden_dim", "embed_dim", "wm_epochs", "wm_lr", "batch_size", "context")
+             "hidden_dim", "embed_dim", "wm_epochs", "wm_lr", "batch_size", "context", "wm_predicts",
+             "ensemble_size")
 AGENT_FIELDS = WM_FIELDS + ("actor_seed", "imag_iters", "imag_batch", "imag_horizon", "actor_lr", "gamma", "lam",
-                            "ent_coef", "critic_wiring", "monitor_every", "monitor_episodes", "eval_horizon")
+                            "ent_coef", "critic_wiring", "monitor_every", "monitor_episodes", "eval_horizon",
+                            "disagreement_penalty")
 
 
 # ... and which modules: editing one of these invalidates the stage's cache, editing others does not.
-WM_MODULES = ("env.py", "expert.py", "data.py", "world_model.py", "config.py", "dreamer.py")
+WM_MODULES = ("env.py", "expert.py", "data.py", "world_model.py", "ensemble.py", "config.py", "dreamer.py")
 AGENT_MODULES = WM_MODULES + ("agent.py", "imagination.py", "reward.py", "evaluate.py")
 
 
@@ -152,12 +155,30 @@ def world_model_stage(cfg: Config, cache_dir=None, model_cache=None, log=print,
         data = load_expert_data(cfg.seed, cfg.n_episodes, cfg.n_val_episodes, cfg.seq_len, cache_dir)
         T = data.torch(cfg.device)
         data_seconds = time.perf_counter() - t0
-        torch.manual_seed(cfg.seed)        # model init reproducible, independent of data collection
-        gen = torch.Generator().manual_seed(cfg.seed)
-        wm = WorldModel(OBS_DIM, ACT_DIM, cfg.latent_dim, cfg.hidden_dim, cfg.embed_dim).to(cfg.device)
-        with gc_paused():
-            hist = train_world_model(wm, T["train_obs"], T["train_act"], cfg, gen,
-                                     progress=_wrap(progress, "world model"), log=log)
+        members, hists = [], []
+        for k in range(cfg.ensemble_size):    # ensemble.py: member 0 is the chapter's single model
+            member_seed = cfg.seed + 1000 * k
+            if k == 0 and cfg.ensemble_size > 1:   # the single model's own stage: from the cache if there
+                single = world_model_stage(cfg.replace(ensemble_size=1, disagreement_penalty=0.0), cache_dir,
+                                           model_cache, log, progress)
+                members.append(single.wm)
+                hists.append(single.history)
+                continue
+            if log and cfg.ensemble_size > 1:
+                log(f"[wm] ensemble member {k + 1}/{cfg.ensemble_size} (seed {member_seed})")
+            torch.manual_seed(member_seed)    # model init reproducible, independent of data collection
+            gen = torch.Generator().manual_seed(member_seed)
+            wm = WorldModel(OBS_DIM, ACT_DIM, cfg.latent_dim, cfg.hidden_dim, cfg.embed_dim,
+                            predicts=cfg.wm_predicts).to(cfg.device)
+            if cfg.wm_predicts == "delta":    # the changes' own std, from the training sequences
+                wm.set_delta_scale(T["train_obs"])
+            with gc_paused():
+                hist = train_world_model(wm, T["train_obs"], T["train_act"], cfg, gen,
+                                         progress=_wrap(progress, "world model"), log=log)
+            members.append(wm)
+            hists.append(hist)
+        if cfg.ensemble_size > 1:
+            wm, hist = EnsembleWorldModel(members), ensemble_history(hists)
         wm.eval()
         error = prediction_error_vs_copy_last(wm.cpu(), T["val_obs"].cpu(), T["val_act"].cpu(),
                                               T["std"].cpu(), cfg.context)
@@ -183,7 +204,8 @@ def agent_stage(cfg: Config, stage: WorldModelStage, model_cache=None, log=print
         agent_seed = cfg.seed + 1 + 7919 * cfg.actor_seed     # actor_seed 0: the chapter's seed + 1
         torch.manual_seed(agent_seed)
         gen = torch.Generator().manual_seed(agent_seed)
-        agent = ActorCritic(cfg.hidden_dim + cfg.latent_dim, ACT_DIM, cfg.hidden_dim).to(cfg.device)
+        # the model's own state size: K*(H+Z) for an ensemble of K (ensemble.py)
+        agent = ActorCritic(stage.wm.hidden_dim + stage.wm.latent_dim, ACT_DIM, cfg.hidden_dim).to(cfg.device)
         init_agent = copy.deepcopy(agent)
         monitor_seeds = start_seeds(MONITOR_SEED_BASE, cfg.seed, cfg.monitor_episodes)
 
@@ -221,6 +243,8 @@ def run(cfg: Config, cache_dir=None, model_cache=None, log=print, progress=None)
                                   T["mean"], T["std"], train_horizon=cfg.imag_horizon)
     ev.update(shift_metrics(ws.wm, rollouts, ws.data, T["mean"], T["std"], cfg.imag_horizon,
                             cfg.seq_len))
+    if isinstance(ws.wm, EnsembleWorldModel):  # how far apart its members dream the evaluation
+        ev.update(disagreement_metrics(ws.wm, rollouts, T["mean"], T["std"], cfg.imag_horizon))
     timing = {"data_s": ws.data_seconds, "world_model_s": ws.seconds - ws.data_seconds,
               "imagination_s": ag.seconds,
               "eval_s": time.perf_counter() - t3, "total_s": time.perf_counter() - t0}
@@ -380,14 +404,15 @@ def report(m: dict, log=print) -> None:
 
 
 # --- command line ------------------------------------------------------------------------------
-CHOICES = {"critic_wiring": WIRINGS}
+CHOICES = {"critic_wiring": WIRINGS, "wm_predicts": PREDICTS, "loop_wm": ("continue", "retrain"),
+           "loop_actor": ("continue", "retrain")}
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(prog: str = "python -m pusht.dreamer") -> argparse.ArgumentParser:
     docs = field_docs()
     # Each config flag's help states its real default; argparse's own would print "None", the
     # marker for "not given" that lets --smoke fill in only what the user left alone.
-    p = argparse.ArgumentParser(prog="python -m pusht.dreamer", description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(prog=prog, description=__doc__.split("\n\n")[0])
     defaults = Config()
     for f in fields(Config):
         default = getattr(defaults, f.name)
@@ -408,8 +433,8 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def parse_config(argv=None):
-    parser = build_parser()
+def parse_config(argv=None, prog: str = "python -m pusht.dreamer"):
+    parser = build_parser(prog)
     args = parser.parse_args(argv)
     given = {f.name: getattr(args, f.name) for f in fields(Config)
              if f.name != "smoke" and getattr(args, f.name) is not None}

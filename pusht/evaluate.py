@@ -31,6 +31,7 @@ class Rollout:
     """One batch of trajectories in one world, in physical units."""
 
     obs: np.ndarray       # (T+1, B, 6) metres; in a dream, obs[0] is the decoded start frame
+                          # (a "delta" world model's dream starts at the true start frame itself)
     actions: np.ndarray   # (T, B, 2)
     rewards: np.ndarray   # (T, B) reward per step on arrival; NaN after an episode ended
     pos_err: np.ndarray   # (T, B) metres, same masking
@@ -69,6 +70,10 @@ def dream(wm, policy, norm_obs0: torch.Tensor, horizon: int):
     Warm the state on the start frames only: ``h = 0``, ``z = posterior(h, encoder(o_0))``. Then,
     ``horizon`` times: act on ``[h, z]``, step the prior with ``wm.img_step``. Decode every state,
     the start included. Returns (decoded observations (T+1, B, D), actions (T, B, A)).
+
+    The decoding goes through ``wm.decode_dream(hs, zs, norm_obs0)``: for the chapter's world
+    model (``predicts="state"``) that is exactly ``wm.decode(hs, zs)``. A ``"delta"`` model decodes
+    changes, which ``decode_dream`` adds up from the start frame (its frame 0 is ``norm_obs0``).
     """
     if horizon < 1:
         raise ValueError(f"horizon must be at least 1 step, got {horizon}")
@@ -81,7 +86,7 @@ def dream(wm, policy, norm_obs0: torch.Tensor, horizon: int):
         hs.append(h)
         zs.append(z)
         acts.append(a)
-    return wm.decode(torch.stack(hs), torch.stack(zs)), torch.stack(acts)
+    return wm.decode_dream(torch.stack(hs), torch.stack(zs), norm_obs0), torch.stack(acts)
 
 
 @torch.inference_mode()

@@ -17,9 +17,10 @@ cannot be saved at all.
 Outside grading (``PUSHT_GRADING_DIR`` unset), ``submit`` does nothing, so learners never notice it.
 
 The chapter's reference implementations of the exercises (``reward_from_obs``, ``lambda_return``,
-``actor_critic_losses``, ``dream``) are marked ``@reference``: during a probe they refuse to run, so a submission that
-merely delegates to the package's own implementation produces no numbers (and the grader's static
-check of the student's source says why it earns no credit).
+``actor_critic_losses``, ``dream``, ``block_disagreement``) are marked ``@reference``: during a
+probe they refuse to run, so a submission that merely delegates to the package's own
+implementation produces no numbers (and the grader's static check of the student's source says
+why it earns no credit).
 """
 
 from __future__ import annotations

@@ -56,9 +56,12 @@ def freeze(module: nn.Module) -> nn.Module:
     return module
 
 
-def imagine(wm, agent, h, z, horizon: int):
+def imagine(wm, agent, h, z, horizon: int, obs0=None):
     """Roll the prior under the actor's sampled actions. Returns states [h, z] (H+1, B, S),
     decoded normalised observations (H, B, D) and the actor's entropy (scalar).
+
+    ``obs0`` (B, D): the normalised real frame (h, z) was filtered on, which a ``"delta"`` world
+    model adds its decoded changes to (``wm.decode_dream``); a ``"state"`` model ignores it.
 
     Written for speed without changing the maths of ``agent.act``: the noise for every step is
     drawn in one call, the std and the entropy (which depend on ``log_std`` only) are computed
@@ -73,7 +76,8 @@ def imagine(wm, agent, h, z, horizon: int):
         h, z = wm.img_step(h, z, action)
         states.append(torch.cat([h, z], dim=-1))
     states = torch.stack(states)                                        # (H+1, B, S)
-    obs_pred = wm.decoder(states[1:])                                   # (H, B, D) = decode(h, z)
+    hs, zs = states[1:].split([wm.hidden_dim, wm.latent_dim], dim=-1)  # views of the dreamed states
+    obs_pred = wm.decode_dream(hs, zs, obs0, includes_start=False)      # (H, B, D)
     return states, obs_pred, agent.entropy()
 
 
@@ -161,6 +165,11 @@ def train_in_imagination(wm, agent, starts_obs, starts_act, mean, std, cfg, gen:
     History: ``imag_reward`` (per-step imagined reward, every iteration), ``imag_return`` (the
     mean lambda-return the actor maximised, critic bootstrap included), ``critic_loss``,
     ``log_std``, and ``monitor_iters``/``monitor_real_reward``.
+
+    An ensemble (``ensemble.EnsembleWorldModel``, which has ``disagreement``) adds
+    ``imag_disagreement``: the members' mean disagreement on the dreamed block position (m) per
+    iteration. With ``cfg.disagreement_penalty`` > 0 the actor is trained on the reward minus that
+    weight times the disagreement (MOPO's penalty); ``imag_reward`` stays the task reward.
     """
     freeze(wm)
     if loss_fn is None:              # a learner's own loss_fn uses their own lambda-return
@@ -169,6 +178,8 @@ def train_in_imagination(wm, agent, starts_obs, starts_act, mean, std, cfg, gen:
     opt = torch.optim.Adam(agent.parameters(), lr=cfg.actor_lr, fused=True)
     hist = {"imag_reward": [], "imag_return": [], "critic_loss": [], "log_std": [], "monitor_iters": [],
             "monitor_real_reward": []}
+    if hasattr(wm, "disagreement"):
+        hist["imag_disagreement"] = []
     with torch.no_grad():   # real start states are data: filter them once, not every update
         starts_h, starts_z = wm.warm(starts_obs, starts_act)
     iters = range(cfg.imag_iters)
@@ -177,8 +188,14 @@ def train_in_imagination(wm, agent, starts_obs, starts_act, mean, std, cfg, gen:
             hist["monitor_iters"].append(it)
             hist["monitor_real_reward"].append(monitor(agent))
         idx = torch.randint(len(starts_obs), (cfg.imag_batch,), generator=gen)
-        states, obs_pred, entropy = imagine(wm, agent, starts_h[idx], starts_z[idx], cfg.imag_horizon)
-        rewards = reward_fn(obs_pred, mean, std)[0]                     # (H, B)
+        states, obs_pred, entropy = imagine(wm, agent, starts_h[idx], starts_z[idx], cfg.imag_horizon,
+                                            starts_obs[idx][:, -1])
+        rewards = task_rewards = reward_fn(obs_pred, mean, std)[0]      # (H, B)
+        if "imag_disagreement" in hist:        # an ensemble: how far apart its members dream the block
+            disagreement = wm.disagreement(states[1:], std, starts_obs[idx][:, -1])  # (H, B), metres
+            hist["imag_disagreement"].append(disagreement.mean().item())
+            if cfg.disagreement_penalty > 0:
+                rewards = task_rewards - cfg.disagreement_penalty * disagreement
 
         actor_loss, critic_loss = loss_fn(agent, states, rewards, entropy, cfg.gamma, cfg.lam,
                                           cfg.ent_coef)
@@ -186,7 +203,7 @@ def train_in_imagination(wm, agent, starts_obs, starts_act, mean, std, cfg, gen:
         set_gradients(agent, actor_loss, critic_loss)
         opt.step()
 
-        hist["imag_reward"].append(rewards.mean().item())
+        hist["imag_reward"].append(task_rewards.mean().item())
         hist["imag_return"].append(-(actor_loss.item() + cfg.ent_coef * entropy.item()))
         hist["critic_loss"].append(critic_loss.item())
         hist["log_std"].append(agent.log_std.mean().item())

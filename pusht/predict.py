@@ -23,7 +23,7 @@ from pathlib import Path
 
 CHOICES = ("a", "b", "c")
 # Exercises with more options than the default three.
-EXERCISE_CHOICES = {"ex1": ("a", "b", "c", "d")}
+EXERCISE_CHOICES = {"ex1": ("a", "b", "c", "d"), "ex3": ("a", "b", "c", "d")}
 MIN_WORDS = 6
 
 
@@ -72,7 +72,7 @@ def choices_of(exercise: str) -> tuple:
 
 
 def lock_prediction(exercise: str, choice: str, reason: str) -> Prediction:
-    """Record your prediction for ``exercise``: a choice (a letter: a, b or c, for Exercise 1 also
+    """Record your prediction for ``exercise``: a choice (a letter: a, b or c, for Exercises 1 and 3 also
     d) and one real sentence of why.
 
     Raises ``ValueError`` with what is expected if the choice or the reason is not usable. The

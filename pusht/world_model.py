@@ -10,6 +10,18 @@ Training (``observe``) filters real sequences and minimises two losses: reconstr
 filtered state back to its frame) and dynamics (the prior, which never sees the frame, must predict
 the posterior's latent from ``h`` alone). The dynamics loss is what makes dreaming possible: in a
 dream only the prior is available.
+
+What the decoder predicts (``predicts``):
+
+* ``"state"`` (the chapter's model): ``decode(h, z)`` is the normalised observation itself.
+* ``"delta"``: ``decode(h, z)`` is the CHANGE since the previous frame, ``o_t - o_{t-1}`` in
+  normalised units, divided by ``delta_std`` (the std of those one-step changes in the training
+  data, per dimension; set by :meth:`WorldModel.set_delta_scale`), as CS285's dynamics models
+  predict normalised deltas. A dream's frames are the start frame plus the running sum of the
+  decoded changes. The start state's own output is never used (it has no previous frame).
+
+Every dream decodes through :meth:`WorldModel.decode_dream`, which gives frames for either kind
+(for ``"state"`` it is exactly ``decode``).
 """
 
 from __future__ import annotations
@@ -26,10 +38,20 @@ def mlp(inp: int, hidden: int, out: int, final: nn.Module | None = None) -> nn.S
     return nn.Sequential(*layers, *([final] if final is not None else []))
 
 
+PREDICTS = ("state", "delta")
+DELTA_STD_FLOOR = 1e-6
+
+
 class WorldModel(nn.Module):
-    def __init__(self, obs_dim: int, act_dim: int, latent_dim: int, hidden_dim: int, embed_dim: int):
+    def __init__(self, obs_dim: int, act_dim: int, latent_dim: int, hidden_dim: int, embed_dim: int,
+                 predicts: str = "state"):
         super().__init__()
-        self.latent_dim, self.hidden_dim = latent_dim, hidden_dim
+        if predicts not in PREDICTS:
+            raise ValueError(f"predicts must be one of {PREDICTS}, got {predicts!r}")
+        self.latent_dim, self.hidden_dim, self.predicts = latent_dim, hidden_dim, predicts
+        # (D,) scale of the decoded changes of a "delta" model (ones until set_delta_scale). A None
+        # buffer for "state": nothing in its state_dict, so its weights hash as they always did.
+        self.register_buffer("delta_std", torch.ones(obs_dim) if predicts == "delta" else None)
         self.encoder = mlp(obs_dim, hidden_dim, embed_dim)
         # tanh keeps both latents in [-1, 1], so the dynamics loss cannot shrink by rescaling z.
         self.posterior = mlp(hidden_dim + embed_dim, hidden_dim, latent_dim, nn.Tanh())
@@ -53,11 +75,51 @@ class WorldModel(nn.Module):
         return h, self.prior(h)
 
     def decode(self, h, z):
-        """Normalised observation of state (h, z); any leading shape."""
+        """The decoder's output for state (h, z); any leading shape. For ``"state"`` the normalised
+        observation; for ``"delta"`` the change since the previous frame over ``delta_std``."""
         return self.decoder(torch.cat([h, z], dim=-1))
 
+    def set_delta_scale(self, norm_obs) -> None:
+        """``delta_std`` := per-dimension std of the one-step changes of ``norm_obs`` (N, T+1, D)
+        (normalised training sequences), floored at 1e-6. Only for a ``"delta"`` model."""
+        if self.predicts != "delta":
+            raise ValueError(f"set_delta_scale is for a 'delta' model; this one predicts {self.predicts!r}")
+        d = (norm_obs[:, 1:] - norm_obs[:, :-1]).reshape(-1, norm_obs.shape[-1])
+        self.delta_std.copy_(d.std(dim=0).clamp_min(DELTA_STD_FLOOR))
+
+    def decode_dream(self, hs, zs, obs0, includes_start: bool = True):
+        """Normalised frames of a dream: every dream decodes through this.
+
+        ``hs`` (T', B, H), ``zs`` (T', B, Z): the dream's states in time order; ``obs0`` (B, D) the
+        normalised real frame the dream starts from (may be None for a ``"state"`` model).
+        ``includes_start``: ``hs[0]`` is the state filtered on ``obs0`` itself (as in
+        ``evaluate.dream``); otherwise ``hs[0]`` is the state one step after it (as in
+        ``imagination.imagine``). Returns (T', B, D), frame t decoded from state t.
+
+        * ``"state"``: exactly ``self.decode(hs, zs)``, the start included.
+        * ``"delta"``: the start state decodes to ``obs0`` itself; each later frame is the previous
+          one plus its state's decoded change times ``delta_std``.
+        """
+        out = self.decode(hs, zs)
+        if self.predicts == "state":
+            return out
+        if obs0 is None:
+            raise ValueError("a 'delta' model's dream needs the start frame obs0 to add its changes to")
+        if includes_start:
+            return torch.cat([obs0[None], self.accumulate(out[1:], obs0)])
+        return self.accumulate(out, obs0)
+
+    def accumulate(self, out, obs0, dim: int = 0):
+        """Decoder outputs of consecutive states after the frame ``obs0``, in time order along
+        ``dim`` -> their normalised frames. ``"state"``: ``out`` itself; ``"delta"``:
+        ``obs0`` plus the running sum of ``out * delta_std``."""
+        if self.predicts == "state":
+            return out
+        return obs0.unsqueeze(dim) + (out * self.delta_std).cumsum(dim)
+
     def step(self, h, z, action):
-        """One dreamed step: returns (h', z', decoded normalised observation)."""
+        """One dreamed step: returns (h', z', the decoder's output): the normalised observation for
+        ``"state"``, the scaled change for ``"delta"`` (to get frames, see :meth:`accumulate`)."""
         h, z = self.img_step(h, z, action)
         return h, z, self.decode(h, z)
 
@@ -76,9 +138,17 @@ class WorldModel(nn.Module):
         return torch.stack(hs, 1), torch.stack(zs, 1)
 
     def observe(self, obs, act):
-        """The two training losses on real sequences: (recon_loss, dyn_loss), both scalars."""
+        """The two training losses on real sequences: (recon_loss, dyn_loss), both scalars.
+
+        ``"state"``: reconstruction decodes every filtered state to its frame. ``"delta"``: it
+        decodes each filtered state t >= 1 to (o_t - o_{t-1}) / delta_std (so its loss is in units
+        of the changes' own variance, not comparable with a state model's)."""
         h, z = self.filter(obs, act)                                # (B, T+1, H), (B, T+1, Z)
-        recon_loss = F.mse_loss(self.decode(h, z), obs)
+        if self.predicts == "delta":
+            target = (obs[:, 1:] - obs[:, :-1]) / self.delta_std
+            recon_loss = F.mse_loss(self.decode(h[:, 1:], z[:, 1:]), target)
+        else:
+            recon_loss = F.mse_loss(self.decode(h, z), obs)
         # The prior learns to imitate the posterior; the posterior is shaped by reconstruction only.
         dyn_loss = F.mse_loss(self.prior(h[:, 1:]), z[:, 1:].detach())
         return recon_loss, dyn_loss
@@ -121,9 +191,10 @@ def prediction_error_vs_copy_last(wm, obs, act, std, context: int = 2):
     errors back to physical units (metres for positions, unitless for sin/cos).
 
     * one-step: filter the true frames up to t, dream one step under a_t, decode; copy-last
-      predicts o_{t+1} = o_t.
+      predicts o_{t+1} = o_t. (A ``"delta"`` model predicts o_t plus its decoded change.)
     * open-loop: filter ``context`` + 1 frames, then dream the rest of the sequence under the true
-      actions with no frames; copy-last holds the last filtered frame.
+      actions with no frames; copy-last holds the last filtered frame. (A ``"delta"`` model
+      accumulates its changes from that frame.)
 
     Returns a dict of (D,) numpy arrays: ``one_step_model``, ``one_step_copy``,
     ``open_loop_model``, ``open_loop_copy`` and the fraction of one-step transitions in which the
@@ -132,6 +203,8 @@ def prediction_error_vs_copy_last(wm, obs, act, std, context: int = 2):
     std = torch.as_tensor(std, dtype=obs.dtype)
     h, _ = wm.filter(obs, act)
     pred = wm.decode(h[:, 1:], wm.prior(h[:, 1:]))                  # (N, T, D): one-step predictions
+    if wm.predicts == "delta":                                      # o_{t+1} = o_t + change
+        pred = obs[:, :-1] + pred * wm.delta_std
 
     def rmse(a, b):
         return (((a - b) * std) ** 2).mean(dim=(0, 1)).sqrt().numpy()
@@ -143,7 +216,7 @@ def prediction_error_vs_copy_last(wm, obs, act, std, context: int = 2):
     for t in range(context, act.shape[1]):
         hc, zc, o = wm.step(hc, zc, act[:, t])
         preds.append(o)
-    preds = torch.stack(preds, 1)                                   # (N, T-context, D)
+    preds = wm.accumulate(torch.stack(preds, 1), obs[:, context], dim=1)   # (N, T-context, D)
     target = obs[:, context + 1:]
     last = obs[:, context: context + 1].expand_as(target)
     block_step = ((obs[:, 1:, 2:4] - obs[:, :-1, 2:4]) * std[2:4]).norm(dim=-1)

@@ -1,4 +1,4 @@
-"""The chapter's main job: execute all five instructor notebooks at the default config, in order.
+"""The chapter's main job: execute every instructor notebook (01-06) at the default config, in order.
 
     python scripts/chapter.py [--out runs/chapter] [--smoke]
 

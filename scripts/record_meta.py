@@ -3,6 +3,7 @@
     python scripts/record_meta.py            # seeds 0-2 at the default config + horizon sweep
                                              # + the tolerance bands (fresh process per code path)
     python scripts/record_meta.py --tolerance-only   # re-measure only the bands, keep the rest
+    python scripts/record_meta.py --closing-only     # re-measure only notebook 06's loop and fixes
 
 Every number in meta.yaml comes from this script's runs; the chapter page's own figures are stored
 beside ours (under ``page``) so a reader can compare, never mixed into them. The determinism test
@@ -175,6 +176,78 @@ def measure_tolerance(seeds=TOLERANCE_SEEDS, log=print, jobs: int = 2) -> dict:
     }
 
 
+# --- notebook 06: the real-data loop and the two other fixes (issue 11) ----------------------------
+CLOSING_KEYS = ["imagination_gap", "imagination_gap_se_eval_horizon", "imagination_gap_train_horizon",
+                "imagined_return_per_step", "real_return_per_step", "real_success_rate",
+                "real_episodes_touching_block", "real_block_displacement", "spawn_tee_dist", "real_final_tee_dist",
+                "real_pusher_at_wall_share", "zero_action_dream_return_per_step", "gap_drift_eval_horizon",
+                "gap_training_train_horizon", "wm_one_step_ratio_tee_x", "wm_one_step_ratio_tee_y",
+                "wm_open_loop_ratio_tee_x", "wm_open_loop_ratio_tee_y", "replay_pusher_err_eval_horizon",
+                "wm_ensemble_disagreement_train_horizon", "wm_ensemble_disagreement_eval_horizon"]
+LOOP_KEYS = CLOSING_KEYS[:13] + ["train_clips", "wm_policy_one_step_block_err", "wm_policy_one_step_pusher_err",
+                                 "wm_policy_open_loop_block_err", "wm_policy_open_loop_pusher_err",
+                                 "wm_policy_open_loop_block_copy_err", "wm_expert_one_step_block_err",
+                                 "wm_expert_open_loop_block_err", "real_block_toward_target"]
+# The two fixes, as notebook 06 runs them (its default config).
+FIXES = {"delta": {"wm_predicts": "delta"}, "ensemble": {"ensemble_size": 3, "disagreement_penalty": 1.0}}
+
+
+def _closing_worker(seed: int) -> None:
+    """Child process: one JSON line with seed ``seed``'s loop rounds and the two fixes' metrics."""
+    from pusht.loop import run_loop
+
+    with tempfile.TemporaryDirectory() as cache:
+        t = time.perf_counter()
+        res = run_loop(make_config(seed=seed), model_cache=cache, log=None)
+        out = {"seed": seed, "loop": [{k: m[k] for k in ["round"] + LOOP_KEYS if k in m} for m in res.rounds],
+               "loop_seconds": round(time.perf_counter() - t, 1)}
+        for name, change in FIXES.items():
+            t = time.perf_counter()
+            m = run(make_config(seed=seed, **change), model_cache=cache, log=None).metrics
+            out[name] = {k: m[k] for k in CLOSING_KEYS if k in m}
+            out[f"{name}_seconds"] = round(time.perf_counter() - t, 1)
+    print(json.dumps(out), flush=True)
+
+
+def closing_acceptance(rounds: list) -> dict:
+    """Issue 11's checks on one seed's loop, on the model's one-step error on the policy's own data
+    (pusher and block): below round 0's in every later round, and below the previous round's in
+    every round; and whether real success ever rose above 0 (the issue's stretch goal)."""
+    parts = ("pusher", "block")
+    err = {p: [m[f"wm_policy_one_step_{p}_err"] for m in rounds] for p in parts}
+    return {"policy_data_one_step_error_below_round_0_in_every_round":
+                all(e < err[p][0] for p in parts for e in err[p][1:]),
+            "policy_data_one_step_error_fell_every_round":
+                all(b < a for p in parts for a, b in zip(err[p], err[p][1:])),
+            "real_success_above_0_in_some_round": any(m["real_success_rate"] > 0 for m in rounds)}
+
+
+def measure_closing(seeds, log=print, jobs: int = 2) -> dict:
+    """The ``closing`` section: per seed, the loop's rounds and one run of each fix, one process per
+    seed (``jobs`` at a time; every run is single-threaded, so this changes no number)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    def measure(seed):
+        return json.loads(_child(["--closing-worker", str(seed)])[-1])
+
+    here = platform_fingerprint()
+    section = {"how": ("scripts/record_meta.py --closing-only: per seed, pusht.loop.run_loop at the default "
+                       "config (round 0 = the offline run), then one offline run per fix: "
+                       + "; ".join(f"{k}: {v}" for k, v in FIXES.items())),
+               "measured_on": f"{here['cpu_model']}, {here['mkl']}, torch {here['torch']}",
+               "loop": {}, "delta": {}, "ensemble": {}, "seconds": {}, "acceptance": {}}
+    with ThreadPoolExecutor(jobs) as pool:
+        for out in pool.map(measure, seeds):
+            s = out["seed"]
+            section["loop"][s], section["delta"][s], section["ensemble"][s] = out["loop"], out["delta"], out["ensemble"]
+            section["seconds"][s] = {k[:-len("_seconds")]: out[k] for k in out if k.endswith("_seconds")}
+            section["acceptance"][s] = closing_acceptance(out["loop"])
+            log(f"seed {s}: loop gaps " + " ".join(f"{m['imagination_gap']:+.3f}" for m in out["loop"])
+                + f"; delta {out['delta']['imagination_gap']:+.3f}; ensemble {out['ensemble']['imagination_gap']:+.3f}",
+                flush=True)
+    return section
+
+
 # --- what a fresh run is checked against, here ------------------------------------------------------
 def platform_differences(recorded: dict, here: dict) -> list[str]:
     """The float-deciding fingerprint keys on which this host differs from meta.yaml's."""
@@ -278,6 +351,36 @@ def render_results(meta: dict) -> str:
     for hz, row in sweep.items():
         lines.append(f"| {hz} | " + ", ".join(f"{g:+.3f}" for g in row["gaps"])
                      + f" | {np.mean(row['gaps']):+.3f} | {max(row['success']):.2f} |")
+    if "closing" in meta:
+        lines += ["", closing_table(meta["closing"])]
+    return "\n".join(lines)
+
+
+def closing_table(c: dict) -> str:
+    """Notebook 06 side by side: each fix's gap (whole evaluation and training horizon), real return,
+    real success and touches, per seed."""
+    seeds = list(c["loop"])
+    lines = [f"Closing the gap (notebook 06; measured on {c['measured_on']}): gap over the evaluation / over "
+             "the training horizon, real reward per step, real successes, episodes touching the block, per seed:",
+             "", "| run | " + " | ".join(f"seed {s}" for s in seeds) + " |", "| --- |" + " --- |" * len(seeds)]
+
+    def cell(m):
+        return (f"{m['imagination_gap']:+.3f} / {m['imagination_gap_train_horizon']:+.3f}, real "
+                f"{m['real_return_per_step']:+.3f}, success {m['real_success_rate']:.0%}, touching "
+                f"{m['real_episodes_touching_block']}")
+
+    n = len(c["loop"][seeds[0]])
+    for r in range(n):
+        name = "offline (round 0)" if r == 0 else f"real-data loop, round {r}"
+        lines.append(f"| {name} | " + " | ".join(cell(c["loop"][s][r]) for s in seeds) + " |")
+    lines.append("| predict changes (offline) | " + " | ".join(cell(c["delta"][s]) for s in seeds) + " |")
+    lines.append("| ensemble of 3, disagreement penalty 1 (offline) | "
+                 + " | ".join(cell(c["ensemble"][s]) for s in seeds) + " |")
+    lines += ["", "The loop's world model on the policy's own data (one-step error, metres, block / pusher, "
+              "round 0 to last): " + "; ".join(
+                  f"seed {s}: " + " -> ".join(f"{m['wm_policy_one_step_block_err']:.3f}/"
+                                            f"{m['wm_policy_one_step_pusher_err']:.3f}" for m in c["loop"][s])
+                  for s in seeds) + "."]
     return "\n".join(lines)
 
 
@@ -317,6 +420,9 @@ def main(argv=None):
                    help="actor seeds per horizon of the sweep (on the world model of seed 0)")
     p.add_argument("--tolerance-only", action="store_true",
                    help="re-measure only the tolerance section of an existing --out")
+    p.add_argument("--closing-only", action="store_true",
+                   help="re-measure only notebook 06's section (the loop and the two fixes) of an existing --out")
+    p.add_argument("--closing-worker", type=int, help=argparse.SUPPRESS)
     p.add_argument("--worker", type=int, nargs="+", help=argparse.SUPPRESS)
     p.add_argument("--worker-threads", type=int, default=1, help=argparse.SUPPRESS)
     p.add_argument("--probe", action="store_true", help=argparse.SUPPRESS)
@@ -326,6 +432,14 @@ def main(argv=None):
         return
     if args.worker:
         _worker(args.worker, args.worker_threads)
+        return
+    if args.closing_worker is not None:
+        _closing_worker(args.closing_worker)
+        return
+    if args.closing_only:
+        record = yaml.safe_load(args.out.read_text())
+        record["closing"] = measure_closing(args.seeds)
+        write_meta(record, args.out)
         return
     if args.tolerance_only:
         record = yaml.safe_load(args.out.read_text())
@@ -359,6 +473,8 @@ def main(argv=None):
         record["page_wiring"][seed] = {k: res.metrics[k] for k in HEADLINE}
         print(f"seed {seed}, page wiring: gap {res.metrics['imagination_gap']:+.4f}", flush=True)
     record["acceptance"] = {seed: acceptance(m) for seed, m in record["seeds"].items()}
+    print("notebook 06: the real-data loop and the two other fixes, one process per seed:", flush=True)
+    record["closing"] = measure_closing(args.seeds)
     print("tolerance bands, one fresh process per float code path:", flush=True)
     record["tolerance"] = measure_tolerance()
     write_meta(record, args.out)

@@ -19,6 +19,7 @@ sys.path.insert(0, str(ROOT / "autograde"))
 import checks  # noqa: E402
 import pusht.evaluate as ev  # noqa: E402
 import pusht.grading as grading  # noqa: E402
+from pusht.ensemble import block_disagreement as package_disagreement  # noqa: E402
 from pusht.reward import reward_from_obs as package_reward  # noqa: E402
 
 
@@ -60,8 +61,15 @@ def dream(wm, policy, norm_obs0, horizon):
     return wm.decode(torch.stack(hs), torch.stack(zs)), torch.stack(acts)
 
 
+def block_disagreement(frames, std):
+    block = frames[..., 2:4] * std[2:4]
+    var = ((block - block.mean(0)) ** 2).mean(0).sum(-1)
+    return torch.where(var > 0, var.clamp_min(1e-30).sqrt(), torch.zeros_like(var))
+
+
 def test_correct_implementations_pass_every_case(grading_dir):
-    for test, fn in ((checks.REWARD, reward), (checks.LAMBDA, lambda_return), (checks.DREAM, dream)):
+    for test, fn in ((checks.REWARD, reward), (checks.LAMBDA, lambda_return), (checks.DREAM, dream),
+                     (checks.DISAGREE, block_disagreement)):
         v = verdict(grading_dir, test, fn)
         assert v.passed, (test.test_id, v.message)
 
@@ -82,7 +90,7 @@ def test_always_equal_objects_record_nothing_that_passes(grading_dir):
 
 def test_the_package_reference_refuses_to_run_inside_a_probe(grading_dir):
     for test, fn in ((checks.REWARD, package_reward), (checks.REWARD, lambda *a: package_reward(*a)),
-                     (checks.DREAM, lambda *a: ev.dream(*a))):
+                     (checks.DREAM, lambda *a: ev.dream(*a)), (checks.DISAGREE, package_disagreement)):
         v = verdict(grading_dir, test, fn)
         assert not v.passed and "package's own solution" in v.message
     assert package_reward(torch.zeros(6), torch.zeros(6), torch.ones(6))[0] == 0   # outside: as usual

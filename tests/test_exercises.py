@@ -12,6 +12,7 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 import torch
 import torch.nn.functional as F
@@ -41,7 +42,7 @@ def visible(src: str) -> str:
 
 
 def namespace(**functions) -> dict:
-    return {"torch": torch, "F": F, "cfg": make_config(), "ActorCritic": ActorCritic,
+    return {"torch": torch, "np": np, "F": F, "cfg": make_config(), "ActorCritic": ActorCritic,
             "policy_of": policy_of, **functions}
 
 
@@ -123,6 +124,41 @@ def dream_stale_latent(wm, policy, norm_obs0, horizon):
     return wm.decode(torch.stack(hs), torch.stack(zs)), torch.stack(acts)
 
 
+def _safe_root(var):
+    positive = var > 0
+    return torch.where(positive, torch.where(positive, var, 1.0).sqrt(), 0.0)
+
+
+def disagreement_sample_variance(frames, std):
+    """Divides by K - 1: the members taken for a sample of some larger population."""
+    return _safe_root((frames[..., 2:4] * std[2:4]).var(dim=0).sum(-1))
+
+
+def disagreement_normalised_units(frames, std):
+    """Never converts to metres: the spread of the normalised frames."""
+    return _safe_root(frames[..., 2:4].var(dim=0, correction=0).sum(-1))
+
+
+def disagreement_std_not_squared(frames, std):
+    """Converts the variance with std instead of std squared: neither normalised units nor metres."""
+    return _safe_root((frames[..., 2:4].var(dim=0, correction=0) * std[2:4]).sum(-1))
+
+
+def disagreement_all_dims(frames, std):
+    """The spread of the whole frame, pusher and yaw included, not of the block centre."""
+    return _safe_root((frames * std).var(dim=0, correction=0).sum(-1))
+
+
+def disagreement_plain_root(frames, std):
+    """Right values, but sqrt(0) has an infinite slope: NaN gradients wherever the members agree."""
+    return (frames[..., 2:4] * std[2:4]).var(dim=0, correction=0).sum(-1).sqrt()
+
+
+def disagreement_detached(frames, std):
+    """Right values from detached frames: the penalty would never reach the actor."""
+    return _safe_root((frames.detach()[..., 2:4] * std[2:4]).var(dim=0, correction=0).sum(-1))
+
+
 def _with_return(fn, default_return):
     """``fn`` as a learner writes it: the return function an optional 8th argument, theirs by default."""
     def losses(agent, states, rewards, entropy, gamma, lam, ent_coef, return_fn=default_return):
@@ -168,6 +204,26 @@ def test_dream(grading_dir):
         run_visible("04_imagination_gap", "dream_impl_tests", dream=wrong)
         v = hidden(grading_dir, test, wrong)
         assert not v.passed and "first failure" in v.message, v.message
+
+
+@pytest.mark.filterwarnings("ignore:var\\(\\)")      # the sample variance of one member
+def test_block_disagreement(grading_dir):
+    test = checks.DISAGREE
+    nb, tests_id = "06_closing_the_gap", "block_disagreement_impl_tests"
+    good = solution(nb, "block_disagreement_impl", "block_disagreement")
+    run_visible(nb, tests_id, block_disagreement=good)
+    assert hidden(grading_dir, test, good).passed
+    for wrong, hint in ((disagreement_sample_variance, "POPULATION variances"),
+                        (disagreement_normalised_units, "in metres"),
+                        (disagreement_std_not_squared, "std squared"),
+                        (disagreement_all_dims, "only the block centre"),
+                        (disagreement_plain_root, "not NaN")):
+        run_visible(nb, tests_id, block_disagreement=wrong)
+        v = hidden(grading_dir, test, wrong)
+        assert not v.passed and hint in v.message, (wrong.__name__, v.message)
+    with pytest.raises(AssertionError, match="carry gradient"):   # the visible tests catch this one
+        run_visible(nb, tests_id, block_disagreement=disagreement_detached)
+    assert "not differentiable" in hidden(grading_dir, test, disagreement_detached).message
 
 
 @pytest.mark.parametrize("test", list(checks.TESTS.values()), ids=list(checks.TESTS))

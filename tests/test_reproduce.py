@@ -146,3 +146,17 @@ def test_the_pages_wiring_is_recorded_beside_dreamers():
     assert set(META["page_wiring"]) == set(META["seeds"])
     for seed, m in META["page_wiring"].items():
         assert m["real_success_rate"] == 0 and m["imagination_gap"] != META["seeds"][seed]["imagination_gap"]
+
+
+def test_notebook_06s_section_covers_every_seed_at_the_default_config():
+    """meta.yaml's ``closing`` block (scripts/record_meta.py --closing-only): every recorded seed
+    has the loop's rounds at the default loop config and one run of each fix, and its recorded
+    verdicts are the ones ``closing_acceptance`` draws from those rounds."""
+    from record_meta import FIXES, closing_acceptance
+
+    c = META["closing"]
+    assert set(c["loop"]) == set(META["seeds"]) and set(FIXES) <= set(c)
+    for seed, rounds in c["loop"].items():
+        assert [m["round"] for m in rounds] == list(range(META["config"]["loop_rounds"] + 1))
+        assert c["acceptance"][seed] == closing_acceptance(rounds)
+        assert all(seed in c[fix] for fix in FIXES)

@@ -1,0 +1,309 @@
+"""Dreamer's real-data loop: act in the real world, learn the model from everything seen, dream again.
+
+    python -m pusht.loop --seed 0 --loop_rounds 3 --out runs/loop0
+
+Notebooks 01-05 are offline: one batch of expert data, one frozen world model, one actor. Real
+Dreamer alternates three steps, and this module runs them round by round:
+
+1. **collect**: run the current policy in the REAL sim from fresh starts, with exploration noise
+   added to its actions (``loop_noise``), ``loop_episodes`` episodes of ``loop_episode_len`` steps;
+   cut them into clips of ``seq_len`` steps and add them to the data;
+2. **model**: continue training the world model on everything seen so far, expert and policy
+   data alike (``loop_wm="continue"``, ``loop_wm_epochs`` passes), or train a fresh one on it
+   (``"retrain"``, ``wm_epochs`` passes);
+3. **behave**: continue training the actor-critic in the new model (``loop_actor="continue"``,
+   ``loop_imag_iters`` updates) or train a fresh one (``"retrain"``), its dreams starting from the
+   start states of every clip, the policy's own included.
+
+Round 0 is the chapter's offline run (``dreamer.run``, cached). After every round both worlds are
+measured on the chapter's held-out evaluation starts, exactly as ``metrics.json`` is, plus the
+world model's error against copy-last on the *policy's* data (clips of the round's real evaluation
+rollouts, never trained on) beside its error on held-out expert data. The normalisation (mean and
+std of the expert frames) is kept fixed, so the networks' inputs mean the same in every round.
+Each round's collection starts come from their own seed range (``data.LOOP_SEED_BASE``), disjoint
+from training, validation, monitoring and evaluation starts.
+"""
+
+from __future__ import annotations
+
+import copy
+import gc
+import hashlib
+import json
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from .agent import ActorCritic
+from .analysis import shift_metrics
+from .config import Config
+from .data import EVAL_SEED_BASE, LOOP_SEED_BASE, start_seeds
+from .dreamer import (AGENT_FIELDS, AGENT_MODULES, _cached, _round, _wrap, gc_paused, run)
+from .env import ACT_DIM, OBS_NAMES
+from .evaluate import Rollout, policy_of, real_rollout, two_world_eval
+from .imagination import freeze, train_in_imagination
+from .world_model import WorldModel, prediction_error_vs_copy_last, train_world_model
+
+LOOP_FIELDS = ("loop_rounds", "loop_episodes", "loop_episode_len", "loop_noise", "loop_wm", "loop_wm_epochs",
+               "loop_actor", "loop_imag_iters")
+LOOP_MODULES = AGENT_MODULES + ("analysis.py", "ensemble.py", "loop.py")
+MODES = ("continue", "retrain")
+
+
+@dataclass
+class LoopResult:
+    """Every round's metrics and evaluation rollouts, and the last round's model and agent."""
+
+    cfg: Config
+    rounds: list           # one flat metrics dict per round, round 0 = the offline chapter run
+    rollouts: list         # one two_world_eval rollouts dict per round
+    wm: object             # the last round's world model (frozen)
+    agent: ActorCritic     # the last round's agent
+    timing: list           # seconds per round, by phase
+
+
+# --- the three steps ----------------------------------------------------------------------------
+@torch.inference_mode()
+def collect_episodes(wm, agent, seeds, steps: int, mean, std, noise: float, gen: torch.Generator) -> Rollout:
+    """Run ``agent``'s deterministic policy plus Gaussian noise of std ``noise`` (clipped to the
+    action box) in the real sim from each start in ``seeds``, ``steps`` steps, all in lockstep.
+    The recorded actions are the ones the sim received."""
+    act = policy_of(agent)
+
+    def explore(state):
+        a = act(state)
+        if noise > 0:
+            a = (a + noise * torch.randn(a.shape, generator=gen).to(a.device)).clamp(-1.0, 1.0)
+        return a
+
+    return real_rollout(wm, explore, seeds, steps, mean, std)
+
+
+def rollout_clips(roll: Rollout, seq_len: int) -> tuple[np.ndarray, np.ndarray]:
+    """Cut every episode of ``roll`` into non-overlapping clips of ``seq_len`` steps, keeping
+    only clips during which the episode was still running. Returns obs (N, seq_len+1, 6) in
+    metres and actions (N, seq_len, 2), the layout of the expert data."""
+    obs, act = np.swapaxes(roll.obs, 0, 1), np.swapaxes(roll.actions, 0, 1)       # (B, T+1, D), (B, T, A)
+    alive = ~np.isnan(roll.rewards.T)                                              # (B, T)
+    clip_obs, clip_act = [], []
+    for s in range(0, act.shape[1] - seq_len + 1, seq_len):
+        ok = alive[:, s: s + seq_len].all(axis=1)
+        clip_obs.append(obs[ok, s: s + seq_len + 1])
+        clip_act.append(act[ok, s: s + seq_len])
+    if not clip_obs:
+        raise ValueError(f"episodes of {act.shape[1]} steps are shorter than one clip of {seq_len} steps; "
+                         f"raise loop_episode_len")
+    return np.concatenate(clip_obs), np.concatenate(clip_act)
+
+
+def policy_data_error(wm, roll: Rollout, mean, std, seq_len: int, context: int) -> dict:
+    """``prediction_error_vs_copy_last`` on clips of real rollouts ``roll`` (the policy's data)."""
+    obs, act = rollout_clips(roll, seq_len)
+    m, s = mean.cpu().numpy().astype(np.float64), std.cpu().numpy().astype(np.float64)
+    norm = torch.as_tensor((obs - m) / s, dtype=torch.float32)
+    return prediction_error_vs_copy_last(wm.cpu(), norm, torch.as_tensor(act, dtype=torch.float32),
+                                         std.cpu(), context)
+
+
+def _members(wm) -> list:
+    return list(wm.members) if hasattr(wm, "members") else [wm]
+
+
+def train_model_round(wm, cfg: Config, obs, act, rnd: int, log=None, progress=None):
+    """Step 2 of round ``rnd``: a trained copy of ``wm`` (``loop_wm="continue"``) or a fresh model
+    of the same kind (``"retrain"``) on the normalised tensors ``obs``/``act``. Returns it frozen."""
+    from .ensemble import EnsembleWorldModel
+
+    members = []
+    for k, old in enumerate(_members(wm)):
+        seed = cfg.seed + 1000 * k + 100_000 * rnd           # each member and round its own stream
+        torch.manual_seed(seed)
+        gen = torch.Generator().manual_seed(seed)
+        if cfg.loop_wm == "continue":
+            member, epochs = copy.deepcopy(old), cfg.loop_wm_epochs
+        else:
+            member = WorldModel(obs.shape[-1], ACT_DIM, cfg.latent_dim, cfg.hidden_dim, cfg.embed_dim,
+                                predicts=cfg.wm_predicts).to(cfg.device)
+            if cfg.wm_predicts == "delta":
+                member.set_delta_scale(obs)
+            epochs = cfg.wm_epochs
+        member.requires_grad_(True)
+        member.train()
+        with gc_paused():
+            train_world_model(member, obs, act, cfg.replace(wm_epochs=epochs), gen,
+                              progress=_wrap(progress, f"round {rnd}: world model"), log=log)
+        member.eval()
+        members.append(member)
+    new = EnsembleWorldModel(members) if len(members) > 1 else members[0]
+    return freeze(new)
+
+
+def train_agent_round(wm, agent, cfg: Config, starts_obs, starts_act, mean, std, rnd: int, log=None,
+                      progress=None) -> tuple[ActorCritic, dict]:
+    """Step 3 of round ``rnd``: the actor-critic trained further (``loop_actor="continue"``) or
+    afresh (``"retrain"``) in the frozen ``wm``, dreams starting from ``starts_obs``."""
+    seed = cfg.seed + 1 + 7919 * cfg.actor_seed + 100_000 * rnd
+    torch.manual_seed(seed)
+    gen = torch.Generator().manual_seed(seed)
+    if cfg.loop_actor == "continue":
+        new, iters = copy.deepcopy(agent), cfg.loop_imag_iters
+    else:
+        new, iters = ActorCritic(wm.hidden_dim + wm.latent_dim, ACT_DIM, cfg.hidden_dim).to(cfg.device), cfg.imag_iters
+    with gc_paused():
+        hist = train_in_imagination(wm, new, starts_obs, starts_act, mean, std, cfg.replace(imag_iters=iters), gen,
+                                    progress=_wrap(progress, f"round {rnd}: imagination"), log=log)
+    return new, hist
+
+
+# --- one round's measurement ----------------------------------------------------------------------
+def _error_metrics(prefix: str, err: dict) -> dict:
+    out = {}
+    for kind in ("one_step", "open_loop"):
+        # copy-last is exact where nothing moved (the block, under a policy that never touches it):
+        # there the ratio is undefined, and NaN says so; the errors in metres below stay defined
+        ratio = np.where(err[f"{kind}_copy"] > 1e-6, err[f"{kind}_model"] / np.maximum(err[f"{kind}_copy"], 1e-6),
+                         np.nan)
+        for d, name in enumerate(OBS_NAMES):
+            out[f"{prefix}_{kind}_ratio_{name}"] = float(ratio[d])
+        for part, dims in (("pusher", (0, 1)), ("block", (2, 3))):
+            model = float(np.sqrt(np.mean(err[f"{kind}_model"][list(dims)] ** 2)))
+            copy_last = float(np.sqrt(np.mean(err[f"{kind}_copy"][list(dims)] ** 2)))
+            out[f"{prefix}_{kind}_{part}_err"] = model               # metres, RMSE over x and y
+            out[f"{prefix}_{kind}_{part}_copy_err"] = copy_last
+    return out
+
+
+def measure_round(cfg: Config, rnd: int, wm, agent, init_agent, data, T, hist: dict, n_clips: int,
+                  n_episodes: int) -> tuple[dict, dict]:
+    """Both worlds on the chapter's evaluation starts, and the model's error on expert and policy data."""
+    eval_seeds = start_seeds(EVAL_SEED_BASE, cfg.seed, cfg.eval_episodes)
+    ev, rollouts = two_world_eval(wm, agent, init_agent, eval_seeds, cfg.eval_horizon, T["mean"], T["std"],
+                                  train_horizon=cfg.imag_horizon)
+    ev.update(shift_metrics(wm, rollouts, data, T["mean"], T["std"], cfg.imag_horizon, cfg.seq_len))
+    expert = prediction_error_vs_copy_last(wm.cpu(), T["val_obs"].cpu(), T["val_act"].cpu(), T["std"].cpu(),
+                                           cfg.context)
+    policy = policy_data_error(wm, rollouts["real_trained"], T["mean"], T["std"], cfg.seq_len, cfg.context)
+    k = min(20, len(hist["imag_reward"]))
+    metrics = {"round": rnd, "seed": cfg.seed, "eval_episodes": cfg.eval_episodes, "eval_horizon": cfg.eval_horizon,
+               "train_clips": int(n_clips), "policy_episodes": int(n_episodes),
+               **ev, **_error_metrics("wm_expert", expert), **_error_metrics("wm_policy", policy),
+               "real_block_toward_target": ev["spawn_tee_dist"] - ev["real_final_tee_dist"],
+               "imagined_reward_first20_train": float(np.mean(hist["imag_reward"][:k])),
+               "imagined_reward_last20_train": float(np.mean(hist["imag_reward"][-k:]))}
+    return {key: _round(v) for key, v in metrics.items()}, rollouts
+
+
+# --- the loop -------------------------------------------------------------------------------------
+def _loop_cache(model_cache, cfg: Config) -> Path | None:
+    if model_cache is None:
+        return None
+    here = Path(__file__).parent
+    h = hashlib.sha256(json.dumps({n: str(getattr(cfg, n)) for n in AGENT_FIELDS + LOOP_FIELDS},
+                                  sort_keys=True).encode())
+    for name in LOOP_MODULES:
+        h.update((here / name).read_bytes())
+    return Path(model_cache) / f"loop_{h.hexdigest()[:16]}.pt"
+
+
+def run_loop(cfg: Config, cache_dir=None, model_cache=None, log=print, progress=None,
+             on_round=None) -> LoopResult:
+    """Round 0 (the offline chapter run) and ``cfg.loop_rounds`` rounds of collect, model, behave.
+
+    ``progress`` wraps the loops (a bar over the rounds, and each round's training); ``on_round(
+    metrics)`` is called after each round is measured (the CLI prints a line). ``model_cache``
+    caches round 0's stages (shared with the notebooks) and the whole loop's result.
+    """
+    cfg.validate()
+
+    def build():
+        base = run(cfg, cache_dir, model_cache, log=log, progress=progress)
+        data, T = base.data, base.data.torch(cfg.device)
+        mean, std = T["mean"], T["std"]
+        wm, agent = base.wm, base.agent
+        obs, act = T["train_obs"], T["train_act"]
+        m0, r0 = measure_round(cfg, 0, wm, agent, base.init_agent, data, T, base.history,
+                               len(obs), 0)
+        rounds, rolls, timing = [m0], [r0], [{"round": 0, **base.timing}]
+        if on_round:
+            on_round(m0)
+        seeds = start_seeds(LOOP_SEED_BASE, cfg.seed, cfg.loop_rounds * cfg.loop_episodes)
+        gen = torch.Generator().manual_seed(cfg.seed + 31337)
+        n_episodes = 0
+        rng = range(1, cfg.loop_rounds + 1)
+        for rnd in (progress(rng, desc="rounds") if progress else rng):
+            t0 = time.perf_counter()
+            batch = seeds[(rnd - 1) * cfg.loop_episodes: rnd * cfg.loop_episodes]
+            roll = collect_episodes(wm, agent, batch, cfg.loop_episode_len, mean, std, cfg.loop_noise, gen)
+            new_obs, new_act = rollout_clips(roll, cfg.seq_len)
+            m, s = mean.cpu().numpy().astype(np.float64), std.cpu().numpy().astype(np.float64)
+            obs = torch.cat([obs, torch.as_tensor((new_obs - m) / s, dtype=torch.float32, device=cfg.device)])
+            act = torch.cat([act, torch.as_tensor(new_act, dtype=torch.float32, device=cfg.device)])
+            n_episodes += len(batch)
+            t1 = time.perf_counter()
+            wm = train_model_round(wm, cfg, obs, act, rnd, log=log, progress=progress)
+            t2 = time.perf_counter()
+            agent, hist = train_agent_round(wm, agent, cfg, obs[:, : cfg.context + 1], act[:, : cfg.context],
+                                            mean, std, rnd, log=log, progress=progress)
+            t3 = time.perf_counter()
+            metrics, rollouts = measure_round(cfg, rnd, wm, agent, base.init_agent, data, T, hist, len(obs),
+                                              n_episodes)
+            rounds.append(metrics)
+            rolls.append(rollouts)
+            timing.append({"round": rnd, "collect_s": t1 - t0, "world_model_s": t2 - t1, "imagination_s": t3 - t2,
+                           "eval_s": time.perf_counter() - t3, "total_s": time.perf_counter() - t0})
+            if on_round:
+                on_round(metrics)
+        return LoopResult(cfg, rounds, rolls, wm, agent, timing)
+
+    return _cached(_loop_cache(model_cache, cfg), build)
+
+
+def save_loop(result: LoopResult, out: Path) -> None:
+    """``out/loop.json`` (every round's metrics, in order), ``out/round<r>.json`` and ``timing.json``."""
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "loop.json").write_text(json.dumps(result.rounds, indent=2, sort_keys=True) + "\n")
+    for m in result.rounds:
+        (out / f"round{m['round']}.json").write_text(json.dumps(m, indent=2, sort_keys=True) + "\n")
+    (out / "config.json").write_text(json.dumps(result.cfg.to_dict(), indent=2) + "\n")
+    (out / "timing.json").write_text(json.dumps([{k: round(v, 3) for k, v in t.items()} for t in result.timing],
+                                                indent=2) + "\n")
+
+
+def round_line(m: dict) -> str:
+    """One round in one line, as the CLI prints it."""
+    return (f"round {m['round']}: gap {m['imagination_gap']:+.3f} (training horizon "
+            f"{m['imagination_gap_train_horizon']:+.3f}), dream {m['imagined_return_per_step']:+.3f}, real "
+            f"{m['real_return_per_step']:+.3f}, success {m['real_success_rate']:.0%}, touching "
+            f"{m['real_episodes_touching_block']}/{m['eval_episodes']}, block moved "
+            f"{m['real_block_displacement']:.3f} m; model on the policy's data, open-loop block "
+            f"{m['wm_policy_open_loop_block_err']:.3f} m (copy-last {m['wm_policy_open_loop_block_copy_err']:.3f} m)")
+
+
+def main(argv=None) -> int:
+    from tqdm.auto import tqdm
+
+    from .data import default_cache_dir
+    from .dreamer import parse_config
+
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if not any(a == "--out" or a.startswith("--out=") for a in argv):
+        seed = next((argv[i + 1] for i, a in enumerate(argv[:-1]) if a == "--seed"), "0")
+        argv += ["--out", f"runs/loop{seed}"]
+    cfg, args = parse_config(argv, prog="python -m pusht.loop")
+    cache = None if args.no_cache else (args.cache or default_cache_dir())
+    result = run_loop(cfg, cache_dir=cache, model_cache=None if args.no_cache else Path(cache) / "stages",
+                      log=None, progress=None if args.quiet else tqdm,
+                      on_round=lambda m: tqdm.write(round_line(m)))
+    save_loop(result, cfg.out)
+    print(f"\nper-round metrics: {cfg.out / 'loop.json'}")
+    return 0
+
+
+if __name__ == "__main__":
+    code = main()
+    gc.freeze()
+    sys.exit(code)

@@ -1,0 +1,306 @@
+"""Notebook 06's support module: Exercise 3's verdict flips with the numbers it is given (judged
+against the per-start standard errors), every sentence reads the numbers it is given, every figure
+draws with labelled axes, and every self-check is well formed. All inputs are small synthetic
+dicts with the keys ``pusht.loop`` and ``metrics.json`` write; no run's files are read."""
+
+import math
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+from pusht.env import OBS_NAMES  # noqa: E402
+from pusht.nb import closing as nb06  # noqa: E402
+from pusht.selfcheck import Question, render  # noqa: E402
+
+N = 30
+
+
+def labelled(fig):
+    assert isinstance(fig, Figure)
+    axes = [ax for ax in fig.axes if ax.get_visible() and ax.axison]
+    assert axes and all(ax.get_xlabel() for ax in axes) and all(ax.get_ylabel() for ax in axes)
+    assert all(ax.get_title() for ax in axes)
+
+
+def metrics(dream=-0.215, real=-0.400, se=0.020, dream_tr=-0.285, real_tr=-0.400, se_tr=0.011, success=0,
+            touches=3, moved=0.003, moved_max=0.06, toward=0.002, final=0.155, wall=0.87, drift=0.23,
+            drift_se=0.022, training_tr=0.007, training_tr_se=0.009, **extra):
+    """One run's metrics, both worlds consistent: every gap is the dream's rating minus reality's."""
+    m = {"seed": 0, "eval_episodes": N, "eval_horizon": 100,
+         "imagined_return_per_step": dream, "real_return_per_step": real,
+         "trained_dream_return_per_step_eval_horizon": dream, "trained_real_return_per_step_eval_horizon": real,
+         "trained_dream_return_per_step_train_horizon": dream_tr, "trained_real_return_per_step_train_horizon": real_tr,
+         "imagination_gap": dream - real, "imagination_gap_eval_horizon": dream - real,
+         "imagination_gap_se_eval_horizon": se, "imagination_gap_train_horizon": dream_tr - real_tr,
+         "imagination_gap_se_train_horizon": se_tr,
+         "real_success_rate": success / N, "real_episodes_touching_block": touches,
+         "real_block_displacement": moved, "real_block_displacement_max": moved_max,
+         "real_block_toward_target": toward, "real_final_tee_dist": final, "spawn_tee_dist": 0.158,
+         "real_pusher_at_wall_share": wall,
+         "gap_drift_eval_horizon": drift, "gap_drift_se_eval_horizon": drift_se,
+         "gap_training_train_horizon": training_tr, "gap_training_se_train_horizon": training_tr_se}
+    m.update(extra)
+    return m
+
+
+def model_errors(policy_block=0.064, policy_pusher=0.117, expert_block=0.014, expert_pusher=0.021,
+                 ol_policy=(0.13, 0.14), ol_expert=(0.035, 0.058), policy_copy_block=0.0005, expert_copy_block=0.0086):
+    e = {"wm_policy_one_step_block_err": policy_block, "wm_policy_one_step_block_copy_err": policy_copy_block,
+         "wm_policy_one_step_pusher_err": policy_pusher, "wm_policy_one_step_pusher_copy_err": 0.010,
+         "wm_expert_one_step_block_err": expert_block, "wm_expert_one_step_block_copy_err": expert_copy_block,
+         "wm_expert_one_step_pusher_err": expert_pusher, "wm_expert_one_step_pusher_copy_err": 0.035}
+    for data, (blk, push) in (("policy", ol_policy), ("expert", ol_expert)):
+        e[f"wm_{data}_open_loop_block_err"], e[f"wm_{data}_open_loop_pusher_err"] = blk, push
+        e[f"wm_{data}_open_loop_block_copy_err"] = 0.04 if data == "expert" else 0.003
+        e[f"wm_{data}_open_loop_pusher_copy_err"] = 0.21 if data == "expert" else 0.08
+    return e
+
+
+def loop(gaps_dreams, reals=None, successes=None, errors=None, se=0.020, **last_extra):
+    """Rounds 0.. with the given dream ratings (and real ratings, successes, model errors)."""
+    k = len(gaps_dreams)
+    reals = reals or [-0.400] * k
+    successes = successes or [0] * k
+    errors = errors or [model_errors(0.064 / (r + 1) ** 2, 0.117 / (r + 1) ** 2) for r in range(k)]
+    rounds = []
+    for r in range(k):
+        m = metrics(dream=gaps_dreams[r], real=reals[r], se=se, success=successes[r],
+                    **(last_extra if r == k - 1 else {}))
+        m.update(errors[r], round=r, policy_episodes=60 * r, train_clips=300 + 360 * r)
+        rounds.append(m)
+    return rounds
+
+
+# --- the statistics ------------------------------------------------------------------------------
+def test_a_change_is_judged_against_both_standard_errors():
+    c = nb06.compare(0.185, 0.020, 0.031, 0.021, N)
+    assert c.diff == pytest.approx(-0.154) and c.se == pytest.approx(math.hypot(0.020, 0.021))
+    assert c.k == pytest.approx(2.045, abs=2e-3) and c.df == 29 and c.outcome == "down"
+    assert c.shrank and not c.grew
+    # the same difference with wide noise does not count
+    wide = nb06.compare(0.185, 0.06, 0.031, 0.06, N)
+    assert wide.outcome == "same" and not wide.shrank and wide.ratio < wide.k
+    # through zero and out the other side, larger: it moved, but did not shrink; it grew
+    flip = nb06.compare(0.185, 0.02, -0.30, 0.02, N)
+    assert flip.outcome == "down" and not flip.shrank and flip.grew
+    # through zero, ending smaller: a shrink
+    assert nb06.compare(0.185, 0.02, -0.05, 0.02, N).shrank
+    # fewer starts, larger k
+    assert nb06.compare(0, 1, 1, 1, 5).k > nb06.compare(0, 1, 1, 1, 30).k
+    assert nb06.compare(0.1, 0.0, 0.1, 0.0, N).outcome == "same"
+
+
+def test_gap_change_reads_round_zero_and_the_last_round():
+    rounds = loop([-0.215, -0.214, -0.332, -0.387])
+    c = nb06.gap_change(rounds)
+    assert c.first == pytest.approx(0.185) and c.last == pytest.approx(0.013)
+    t = nb06.gap_change(rounds, "train_horizon")
+    assert t.first == pytest.approx(rounds[0]["imagination_gap_train_horizon"])
+    with pytest.raises(ValueError, match="round 0 and at least one"):
+        nb06.gap_change(rounds[:1])
+    with pytest.raises(ValueError, match="span"):
+        nb06.gap_change(rounds, "whole")
+
+
+def test_fisher_counts():
+    assert nb06.count_rise_p(0, 0, N) == pytest.approx(1.0)
+    assert nb06.count_rise_p(0, 1, N) == pytest.approx(0.5)                 # one event: either round
+    assert nb06.count_rise_p(3, 13, N) < nb06.COUNT_P < nb06.count_rise_p(3, 5, N)
+    # the hypergeometric tail, by hand: 0 then 2 of 30 each
+    assert nb06.count_rise_p(0, 2, N) == pytest.approx(math.comb(30, 2) / math.comb(60, 2))
+
+
+def test_the_block_bounds_hold_for_any_starts_that_fit_the_metrics():
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        d = rng.uniform(0, 0.3, N) * (rng.uniform(size=N) < 0.5)           # many blocks never move
+        t = d * rng.uniform(-1, 1, N)                                       # |toward| <= displacement
+        m = {"eval_episodes": N, "real_block_displacement": d.mean(), "real_block_displacement_max": d.max(),
+             "real_block_toward_target": t.mean()}
+        assert d.std(ddof=1) / np.sqrt(N) <= nb06.displacement_se_bound(m) + 1e-12
+        assert t.std(ddof=1) / np.sqrt(N) <= nb06.toward_se_bound(m) + 1e-12
+    m = metrics(moved=0.05, moved_max=0.26, toward=-0.016)
+    assert nb06.toward_outcome(m) == "same"                                 # within k bounds
+    assert nb06.toward_outcome(metrics(moved=0.05, moved_max=0.06, toward=-0.04)) == "farther"
+    assert nb06.toward_outcome(metrics(moved=0.05, moved_max=0.06, toward=0.045)) == "closer"
+    assert nb06.toward_outcome(metrics(moved=0.0, moved_max=0.0, toward=0.0)) == "same"
+
+
+# --- Exercise 3's verdict ------------------------------------------------------------------------
+def test_the_verdict_flips_with_the_numbers():
+    assert set(nb06.EX3_OPTIONS) == {"a", "b", "c", "d"}
+    assert nb06.ex3_verdict(loop([-0.215, -0.387])) == "b"                      # shrinks, no success
+    assert nb06.ex3_verdict(loop([-0.215, -0.387], successes=[0, 2])) == "a"    # shrinks, successes
+    assert nb06.ex3_verdict(loop([-0.215, -0.230])) == "c"                      # within the noise
+    assert nb06.ex3_verdict(loop([-0.215, -0.100], successes=[0, 1])) == "d"    # grows, a success
+    assert nb06.ex3_verdict(loop([-0.215, -0.700])) == "c"                      # through zero, larger
+    assert nb06.ex3_verdict(loop([-0.215, -0.387], se=0.08)) == "c"             # wide noise swallows it
+    # reality rising to the dream closes the gap too
+    assert nb06.ex3_verdict(loop([-0.215, -0.215], reals=[-0.400, -0.250])) == "b"
+
+
+# --- sentences -----------------------------------------------------------------------------------
+def test_the_reconciliation_says_from_which_side_the_gap_moved():
+    text = nb06.reconcile_text(loop([-0.215, -0.214, -0.332, -0.387]))
+    assert "+0.185" in text and "after round 3 +0.013" in text and "conservative" in text
+    assert "The gap shrank" in text and "from the dream's side" in text and "dream came down" in text
+    assert "Real success stayed at 0%" in text and "answer is (b)" in text
+    up = nb06.reconcile_text(loop([-0.215, -0.215], reals=[-0.400, -0.250]))
+    assert "from reality's side" in up and "what the policy really earns rose" in up and "Reality rose" in up
+    grew = nb06.reconcile_text(loop([-0.215, -0.100], successes=[0, 1]))
+    assert "The gap grew" in grew and "Real success rose above 0%" in grew and "could be luck" in grew
+    assert "answer is (d)" in grew
+    same = nb06.reconcile_text(loop([-0.215, -0.230]))
+    assert "did not change beyond the noise" in same and "Neither rating alone" in same
+    flip = nb06.reconcile_text(loop([-0.215, -0.700]))
+    assert "changed sign" in flip and "The gap grew" in flip
+    many = nb06.reconcile_text(loop([-0.215, -0.387], successes=[0, 9]))
+    assert "beyond chance" in many and "answer is (b)" not in many
+
+
+def test_the_table_has_a_row_per_round_with_its_numbers():
+    rounds = loop([-0.215, -0.214, -0.332])
+    t = nb06.rounds_table(rounds)
+    lines = [ln for ln in t.splitlines() if ln.startswith("| ") and not ln.startswith("| round")]
+    assert len(lines) == 3 and "+0.185 ± 0.020" in lines[0] and "87%" in lines[0]
+    assert "64.0 / 0.5" in lines[0] and "16.0 / 0.5" in lines[1]            # model / copy-last, mm
+    rounds[2]["real_pusher_at_wall_share"] = 0.03
+    assert "| 3% |" in nb06.rounds_table(rounds)
+
+
+def test_the_model_error_sentence_reads_every_round():
+    rounds = loop([-0.2] * 4)
+    s = nb06.model_error_sentence(rounds)
+    assert "64.0 -> 16.0 -> 7.1 -> 4.0 mm (fell in every round)" in s
+    assert "held within 1 mm throughout" in s                                # expert one-step: constant
+    errors = [model_errors(b, 0.1 / (r + 1), expert_block=0.01 + 0.002 * r, ol_expert=(0.035 + 0.005 * r, 0.06))
+              for r, b in enumerate((0.064, 0.015, 0.0078, 0.0069))]
+    s = nb06.model_error_sentence(loop([-0.2] * 4, errors=errors))
+    assert "fell in rounds 1 and 2, held within 1 mm in round 3" in s
+    assert "rose in every round" in s and "worse, on some measures, where the expert went" in s
+    assert "78% of its 1380 training clips" in s
+    errors[-1]["wm_policy_one_step_block_err"] = 0.03
+    assert "rose in round 3" in nb06.model_error_sentence(loop([-0.2] * 4, errors=errors))
+
+
+def test_the_block_sentence_reads_touches_and_direction():
+    rounds = loop([-0.2, -0.3], touches=13, moved=0.05, moved_max=0.26, toward=-0.016, wall=0.03)
+    s = nb06.block_sentence(rounds)
+    assert "87%, 3%" in s and "3, 13 of 30" in s and "beyond chance" in s
+    assert "0.016 m farther from" in s and "not told apart from where it spawned" in s
+    assert "more, beyond the noise" in s and "not toward the target" in s
+    s = nb06.block_sentence(loop([-0.2, -0.3], touches=13, moved=0.05, moved_max=0.06, toward=0.045))
+    assert "closer, beyond the noise" in s and "toward the target, measurably" in s
+    s = nb06.block_sentence(loop([-0.2, -0.3], touches=3, moved=0.004, moved_max=0.06, toward=0.0))
+    assert "3, 3 of 30 evaluation episodes." in s and "not told apart by these starts" in s
+
+
+def single(**kw):
+    """A single run's metrics.json (the keys a loop round lacks included); ``kw`` as in :func:`metrics`."""
+    base = dict(imag_horizon=15, replay_pusher_err_train_horizon=0.187, replay_pusher_err_eval_horizon=0.232,
+                replay_block_err_train_horizon=0.19, replay_block_err_eval_horizon=0.25,
+                zero_action_dream_final_tee_dist=0.061, train_clip_steps=16, dream_steps_per_train_clip=6.25)
+    for d in OBS_NAMES:
+        base[f"wm_one_step_ratio_{d}"], base[f"wm_open_loop_ratio_{d}"] = 1.4, 0.9
+    base.update(kw)
+    return metrics(**base)
+
+
+def delta(runaway=True, **kw):
+    """The delta model's metrics: beats copy-last one step ahead, its long dream runs away."""
+    params = dict(dream=-0.643, se=0.035, dream_tr=-0.291, real_tr=-0.399, drift=0.021,
+                  replay_pusher_err_train_horizon=0.296, replay_pusher_err_eval_horizon=4.97 if runaway else 0.15,
+                  zero_action_dream_final_tee_dist=0.40,
+                  **{f"wm_{kind}_ratio_{d}": r for d in OBS_NAMES for kind, r in (("one_step", 0.45),
+                                                                                  ("open_loop", 0.53))})
+    params.update(kw)
+    return single(**params)
+
+
+def ensemble(dis=0.036, **kw):
+    """The ensemble's metrics: a rosier mean dream, members that disagree less than they err."""
+    params = dict(dream=-0.126, se=0.020, dream_tr=-0.272, real_tr=-0.400, wm_ensemble_disagreement_train_horizon=dis,
+                  wm_ensemble_disagreement_eval_horizon=dis * 1.2, replay_block_err_train_horizon=0.18,
+                  replay_block_err_eval_horizon=0.198)
+    params.update(kw)
+    return single(**params)
+
+
+def test_the_delta_sentence_reads_ratios_horizons_and_the_runaway():
+    s = nb06.delta_sentence(single(), delta())
+    assert "0.45/0.45 (x/y)" in s and "every dimension" in s and "1.40/1.40" in s
+    assert "-0.243 ± 0.035 (gloomier than reality" in s and "+0.108" in s and "changed sign" in s
+    assert "rosy over the span the actor trained on and gloomy" in s
+    assert "moves a block nobody touches" in s and "4.970 m off after 10 s" in s and "left the table" in s
+    assert "16-step clips" in s and "6.25" in s
+    tame = nb06.delta_sentence(single(), delta(runaway=False, zero_action_dream_final_tee_dist=0.159))
+    assert "left the table" not in tame and "nobody touches" not in tame and "no farther off" in tame
+    assert "changed sign" not in nb06.delta_sentence(single(), delta(dream=-0.3))      # +0.100: rosy at both
+    assert "gloomy over the span" in nb06.delta_sentence(single(), delta(dream_tr=-0.5, dream=-0.2))
+    worse = delta()
+    worse["wm_one_step_ratio_agent_x"] = 1.2
+    assert "on 5 of 6 dimensions" in nb06.delta_sentence(single(), worse)
+
+
+def test_the_ensemble_sentence_reads_gaps_and_shared_bias():
+    s = nb06.ensemble_sentence(single(), ensemble(), penalty=1.0)
+    assert "+0.274 ± 0.020" in s and "rosier than the single model's, beyond the noise" in s
+    assert "0.036 m" in s and "0.180 m" in s and "share" in s and "cannot see it" in s
+    assert "penalty of 1 per metre" in s and "0.036 per step" in s
+    flagged = nb06.ensemble_sentence(single(), ensemble(dis=0.3))
+    assert "does flag the error" in flagged and "cannot see it" not in flagged and "penalty of" not in flagged
+    same = nb06.ensemble_sentence(single(), ensemble(dream=-0.21, dream_tr=-0.28))
+    assert "rosier" not in same and same.count("not told apart from the single model's") == 2
+    assert "no ensemble disagreement" in nb06.ensemble_sentence(single(), single())
+
+
+def test_the_conclusion_reads_each_fix():
+    rounds = loop([-0.215, -0.387], training_tr=0.014, drift=-0.068, drift_se=0.029)
+    c = nb06.conclusion(rounds, single(), delta(), ensemble())
+    assert "real-data loop (1 round, 60 real policy episodes)" in c
+    assert "shrank beyond the noise" in c and "changed sign" in c and "grew beyond the noise" in c
+    assert "No fix produced a single real success" in c and "not told apart from zero" in c
+    assert "it fell beyond the noise" in c and "may have taught the model otherwise" in c
+    won = nb06.conclusion(loop([-0.215, -0.387], successes=[0, 2], training_tr=0.05, training_tr_se=0.01),
+                          single(), delta(), ensemble())
+    assert "Real successes appeared with the loop (2/30)" in won and "No fix" not in won
+    assert "keeps learning things only the model pays for" in won
+
+
+def test_expert_ratios_are_read_from_either_kind_of_metrics():
+    assert nb06.expert_ratio({"wm_one_step_ratio_tee_x": 0.4}, "one_step", "tee_x") == 0.4
+    assert nb06.expert_ratio({"wm_expert_open_loop_ratio_tee_y": 0.7}, "open_loop", "tee_y") == 0.7
+    with pytest.raises(KeyError):
+        nb06.expert_ratio({}, "one_step", "tee_x")
+
+
+# --- figures -------------------------------------------------------------------------------------
+def test_every_figure_draws_with_labelled_axes():
+    import matplotlib.pyplot as plt
+
+    rounds = loop([-0.215, -0.214, -0.332, -0.387], touches=13, moved=0.05, moved_max=0.26, toward=-0.016)
+    labelled(nb06.fig_rounds(rounds))
+    labelled(nb06.fig_model_error(rounds))
+    labelled(nb06.fig_block(rounds))
+    labelled(nb06.fig_fixes(single(), rounds[-1], delta(), ensemble()))
+    labelled(nb06.fig_fixes(single(), rounds[-1], delta(), ensemble(), labels=["a", "b", "c", "d"]))
+    with pytest.raises(ValueError, match="labels"):
+        nb06.fig_fixes(single(), rounds[-1], delta(), ensemble(), labels=["a"])
+    zero = loop([-0.2, -0.3], errors=[model_errors(policy_copy_block=0.0)] * 2)   # a zero: no log axis
+    assert nb06.fig_model_error(zero).axes[1].get_yscale() == "linear"
+    plt.close("all")
+
+
+# --- self-checks ---------------------------------------------------------------------------------
+def test_self_checks_are_well_formed():
+    assert 3 <= len(nb06.SELF_CHECKS) <= 4
+    for name, q in nb06.SELF_CHECKS.items():
+        assert isinstance(q, Question) and q.answer in q.options and len(q.options) >= 3, name
+        assert q.why and "Type one of" in render(q, "")
+        assert "is right" in render(q, q.answer)
+    assert len({q.answer for q in nb06.SELF_CHECKS.values()}) > 1                # not always the same letter
