@@ -2,7 +2,7 @@
 
     python benchmarks/bench_memory.py [--out DIR] [--reuse DIR]
 
-Runs the five solution notebooks as `make chapter` does (scripts/chapter.py, default config, a
+Runs the solution notebooks as `make chapter` does (scripts/chapter.py, default config, a
 fresh output folder, so nothing is cached and every model is trained), which measures each
 notebook's kernel while it runs (VmHWM, its resident-memory high-water mark, from /proc) and writes
 <out>/memory.json. With --reuse DIR it reads the memory.json of a chapter run already done instead,
