@@ -142,6 +142,16 @@ def gc_paused():
             gc.enable()
 
 
+def new_world_model(cfg: Config, train_obs: torch.Tensor) -> WorldModel:
+    """An untrained world model of ``cfg``'s sizes and kind; a ``"delta"`` model gets the changes'
+    own std from the normalised training sequences ``train_obs``. Seed torch first."""
+    wm = WorldModel(OBS_DIM, ACT_DIM, cfg.latent_dim, cfg.hidden_dim, cfg.embed_dim,
+                    predicts=cfg.wm_predicts).to(cfg.device)
+    if cfg.wm_predicts == "delta":
+        wm.set_delta_scale(train_obs)
+    return wm
+
+
 def world_model_stage(cfg: Config, cache_dir=None, model_cache=None, log=print,
                       progress=None) -> WorldModelStage:
     """Step 1: collect expert data, train 3.1's world model, measure it against copy-last, freeze.
@@ -168,10 +178,7 @@ def world_model_stage(cfg: Config, cache_dir=None, model_cache=None, log=print,
                 log(f"[wm] ensemble member {k + 1}/{cfg.ensemble_size} (seed {member_seed})")
             torch.manual_seed(member_seed)    # model init reproducible, independent of data collection
             gen = torch.Generator().manual_seed(member_seed)
-            wm = WorldModel(OBS_DIM, ACT_DIM, cfg.latent_dim, cfg.hidden_dim, cfg.embed_dim,
-                            predicts=cfg.wm_predicts).to(cfg.device)
-            if cfg.wm_predicts == "delta":    # the changes' own std, from the training sequences
-                wm.set_delta_scale(T["train_obs"])
+            wm = new_world_model(cfg, T["train_obs"])
             with gc_paused():
                 hist = train_world_model(wm, T["train_obs"], T["train_act"], cfg, gen,
                                          progress=_wrap(progress, "world model"), log=log)

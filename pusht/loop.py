@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import copy
 import gc
-import hashlib
 import json
 import sys
 import time
@@ -42,11 +41,12 @@ from .agent import ActorCritic
 from .analysis import shift_metrics
 from .config import Config
 from .data import EVAL_SEED_BASE, LOOP_SEED_BASE, start_seeds
-from .dreamer import (AGENT_FIELDS, AGENT_MODULES, _cached, _round, _wrap, gc_paused, run)
+from .dreamer import (AGENT_FIELDS, AGENT_MODULES, _cache_path, _cached, _round, _wrap, gc_paused,
+                      new_world_model, run)
 from .env import ACT_DIM, OBS_NAMES
 from .evaluate import Rollout, policy_of, real_rollout, two_world_eval
 from .imagination import freeze, train_in_imagination
-from .world_model import WorldModel, prediction_error_vs_copy_last, train_world_model
+from .world_model import prediction_error_vs_copy_last, train_world_model
 
 LOOP_FIELDS = ("loop_rounds", "loop_episodes", "loop_episode_len", "loop_noise", "loop_wm", "loop_wm_epochs",
                "loop_actor", "loop_imag_iters")
@@ -126,11 +126,7 @@ def train_model_round(wm, cfg: Config, obs, act, rnd: int, log=None, progress=No
         if cfg.loop_wm == "continue":
             member, epochs = copy.deepcopy(old), cfg.loop_wm_epochs
         else:
-            member = WorldModel(obs.shape[-1], ACT_DIM, cfg.latent_dim, cfg.hidden_dim, cfg.embed_dim,
-                                predicts=cfg.wm_predicts).to(cfg.device)
-            if cfg.wm_predicts == "delta":
-                member.set_delta_scale(obs)
-            epochs = cfg.wm_epochs
+            member, epochs = new_world_model(cfg, obs), cfg.wm_epochs
         member.requires_grad_(True)
         member.train()
         with gc_paused():
@@ -198,17 +194,6 @@ def measure_round(cfg: Config, rnd: int, wm, agent, init_agent, data, T, hist: d
 
 
 # --- the loop -------------------------------------------------------------------------------------
-def _loop_cache(model_cache, cfg: Config) -> Path | None:
-    if model_cache is None:
-        return None
-    here = Path(__file__).parent
-    h = hashlib.sha256(json.dumps({n: str(getattr(cfg, n)) for n in AGENT_FIELDS + LOOP_FIELDS},
-                                  sort_keys=True).encode())
-    for name in LOOP_MODULES:
-        h.update((here / name).read_bytes())
-    return Path(model_cache) / f"loop_{h.hexdigest()[:16]}.pt"
-
-
 def run_loop(cfg: Config, cache_dir=None, model_cache=None, log=print, progress=None,
              on_round=None) -> LoopResult:
     """Round 0 (the offline chapter run) and ``cfg.loop_rounds`` rounds of collect, model, behave.
@@ -259,7 +244,7 @@ def run_loop(cfg: Config, cache_dir=None, model_cache=None, log=print, progress=
                 on_round(metrics)
         return LoopResult(cfg, rounds, rolls, wm, agent, timing)
 
-    return _cached(_loop_cache(model_cache, cfg), build)
+    return _cached(_cache_path(model_cache, "loop", cfg, AGENT_FIELDS + LOOP_FIELDS, LOOP_MODULES), build)
 
 
 def save_loop(result: LoopResult, out: Path) -> None:

@@ -52,7 +52,7 @@ import numpy as np
 from ..env import ARENA_HALF, CONTROL_DT, OBS_NAMES, SUCCESS_POS
 from ..selfcheck import Question
 from .gap import NEAR
-from .horizon import LEVEL, t_quantile
+from .horizon import LEVEL, Test, t_quantile
 
 # 1 mm: the resolution at which the model's errors are read as changed. Physically: a thirtieth of
 # the pusher's radius (3 cm), a twentieth of the success radius (2 cm); it is also the package's
@@ -93,24 +93,14 @@ def k_for(n_starts: int, level: float = LEVEL) -> float:
 
 
 @dataclass(frozen=True)
-class Change:
-    """One quantity, measured twice: ``first`` and ``last``, their difference ``diff`` (last minus
-    first), its standard error ``se`` (sqrt of the sum of the two squared standard errors), the
-    degrees of freedom and the threshold ``k``, and the ``outcome``: "up", "down" or "same"
-    (within k standard errors)."""
+class Change(Test):
+    """One quantity, measured twice: horizon's ``Test`` (``diff`` = last minus first, its standard
+    error ``se`` = sqrt of the sum of the two squared standard errors, the degrees of freedom, the
+    threshold ``k`` and the ``outcome`` "up", "down" or "same", within k standard errors) plus the
+    two values themselves, ``first`` and ``last``."""
 
     first: float
     last: float
-    diff: float
-    se: float
-    df: float
-    k: float
-    outcome: str
-
-    @property
-    def ratio(self) -> float:
-        """|diff| in standard errors."""
-        return abs(self.diff) / self.se if self.se > 0 else (math.inf if self.diff else 0.0)
 
     @property
     def shrank(self) -> bool:
@@ -136,7 +126,8 @@ def compare(first: float, first_se: float, last: float, last_se: float, n_starts
     se = float(math.sqrt(first_se ** 2 + last_se ** 2))
     k = k_for(int(n_starts), level)
     diff = float(last - first)
-    return Change(float(first), float(last), diff, se, float(n_starts - 1), k, _outcome(diff, k * se))
+    return Change(diff=diff, se=se, df=float(n_starts - 1), k=k, outcome=_outcome(diff, k * se),
+                  first=float(first), last=float(last))
 
 
 def metric_change(a: dict, b: dict, key: str, se_key: str, level: float = LEVEL) -> Change:
