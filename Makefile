@@ -3,7 +3,7 @@
 #   make test     the test suite (runs every notebook in smoke mode, checks the release)
 #   make run      the pipeline alone, seed 0, default config -> runs/seed0/metrics.json
 #   make release  regenerate the student notebooks/ from solutions/ (nbgrader)
-#   make grade    grade a class: make grade SUBMISSIONS=lms_download.zip
+#   make grade    grade a class: make grade SUBMISSIONS=lms_download.zip [SCHEDULER=tcp://host:8786] [REGRADE=1]
 #   make lab      JupyterLab on the student notebooks (instructors: jupyter lab solutions/)
 #   make bench    speed figures -> benchmarks/wallclock.csv
 #   make meta     re-measure seeds 0-2 and the horizon sweep -> meta.yaml
@@ -56,7 +56,7 @@ release: setup
 
 grade: setup sandbox
 	@test -n "$(SUBMISSIONS)" || (echo "usage: make grade SUBMISSIONS=path/to/submissions.zip" && exit 2)
-	$(PY) autograde/grade.py "$(SUBMISSIONS)"
+	$(PY) autograde/grade.py "$(SUBMISSIONS)" $(if $(SCHEDULER),--scheduler $(SCHEDULER)) $(if $(REGRADE),--regrade)
 
 lab: setup
 	$(VENV)/bin/jupyter lab notebooks/

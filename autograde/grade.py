@@ -35,8 +35,11 @@ from __future__ import annotations
 
 import argparse
 import csv
+import hashlib
+import io
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -44,6 +47,7 @@ import sys
 import tempfile
 import time
 import warnings
+import zipfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -67,6 +71,7 @@ NOTEBOOKS = sorted(p.name for p in (ROOT / "solutions").glob("*.ipynb"))
 EXERCISES = {"ex1": "04_imagination_gap", "ex2": "05_horizon", "ex3": "06_closing_the_gap"}
 FEEDBACK_OUTPUT_CHARS = 20_000      # per output in a feedback page; the rest is cut with a note
 FEEDBACK_NOTEBOOK_CHARS = 2_000_000  # all outputs of one notebook together
+WIDGET = "application/vnd.jupyter.widget-view+json"
 HIDDEN_NOTE = "# (hidden tests: run by the grader; their verdict is printed below)\n"
 
 
@@ -157,30 +162,46 @@ def prepare_student(uploads: dict, release: dict) -> tuple[dict, list[str], dict
     return notebooks, notes, completion, delegated
 
 
-def private_course(course: Path, student: str, notebooks: dict, work: Path) -> Path:
+def course_bundle(course: Path) -> bytes:
+    """What a grading task needs of the course, as one zip: nbgrader's config, the assignment's
+    source and release versions and an empty gradebook (no other student, no manual grades). It
+    is built once per batch; a Dask worker on another machine receives it once."""
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf:
+        zf.write(course / "nbgrader_config.py", "nbgrader_config.py")
+        for sub in ("source", "release"):
+            for p in sorted((course / sub).rglob("*")):
+                if p.is_file():
+                    zf.write(p, p.relative_to(course).as_posix())
+        zf.write(course / "gradebook.template.db", "gradebook.db")
+    return buf.getvalue()
+
+
+def private_course(bundle: bytes, student: str, notebooks: dict, work: Path) -> Path:
     """A copy of the course with only this student in it; the kernel sees none of it but its folder."""
     priv = work / "course"
     priv.mkdir(parents=True)
-    shutil.copy(course / "nbgrader_config.py", priv / "nbgrader_config.py")
-    shutil.copytree(course / "source", priv / "source")
-    shutil.copytree(course / "release", priv / "release")
-    shutil.copy(course / "gradebook.template.db", priv / "gradebook.db")
+    with zipfile.ZipFile(io.BytesIO(bundle)) as zf:
+        zf.extractall(priv)           # our own zip: names were written by course_bundle above
     dest = priv / "submitted" / student / ASSIGNMENT
     dest.mkdir(parents=True)
     for name, nb in notebooks.items():
-        nbformat.write(nb, dest / name)
+        (dest / name).write_text(nb if isinstance(nb, str) else nbformat.writes(nb), encoding="utf-8")
     (dest / "timestamp.txt").write_text("2026-01-01 00:00:00.000000 UTC")   # fixed: regrades match
     return priv
 
 
-def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | None, limits: dict) -> dict:
+def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | None, limits: dict,
+           shared: str | None = None) -> dict:
     """Autograde every notebook of one student in the private course ``priv`` (runs in its own
-    process). Returns {notebook: {"ok", "error", "scores": {grade_id: auto score}, "verdicts"}}."""
+    process). Returns {notebook: {"ok", "error", "scores": {grade_id: auto score}, "verdicts"}}.
+    ``shared``: a folder of stages computed once for the whole batch, which the kernels read."""
     from nbgrader.api import Gradebook
     from nbgrader.apps import NbGraderAPI
     from nbgrader.coursedir import CourseDirectory
     from traitlets.config import PyFileConfigLoader
 
+    sandbox.die_with_parent()
     run = priv.parent / "run"
     grading, sockets, runtime = run / "grading", run / "sockets", run / "runtime"
     for p in (grading / "cases", sockets, runtime):
@@ -189,19 +210,26 @@ def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | Non
         (grading / "cases" / f"{test.test_id}.json").write_text(json.dumps([c.spec for c in test.cases]))
     os.environ["JUPYTER_RUNTIME_DIR"] = str(runtime)
     os.environ["NBGRADER_EXECUTION"] = "autograde"
+    os.environ["TQDM_DISABLE"] = "1"      # no progress bars (and no rates or times) in graded outputs
     config = PyFileConfigLoader("nbgrader_config.py", path=str(priv)).load_config()
     config.CourseDirectory.root = str(priv)
     config.CourseDirectory.db_url = f"sqlite:///{priv / 'gradebook.db'}"
     config.Execute.timeout = timeout
+    # Once the last cell has run (its results already on disk), the kernel is killed rather than asked
+    # to shut down: a polite shutdown waits about 1.3 s per notebook for the kernel to exit
+    # (benchmarks/grading_wallclock.txt), and a killed sandbox takes every process in it along.
+    config.Execute.shutdown_kernel = "immediate"
     config.KernelManager.transport = "ipc"
     config.KernelManager.ip = str(sockets / "k")
     if confine:
         sandbox.write_kernelspec(run / "jupyter", {"socket_dir": str(sockets), "grading_dir": str(grading),
-                                                   "uid": uid, "limits": limits})
+                                                   "uid": uid, "limits": limits, "shared_cache": shared})
         os.environ["JUPYTER_PATH"] = str(run / "jupyter")
         config.Execute.kernel_name = sandbox.KERNEL_NAME
     else:
         os.environ["PUSHT_GRADING_DIR"] = str(grading)
+        if shared:
+            os.environ[sandbox.SHARED_CACHE_ENV] = shared
     out = {}
     for name in [p.name for p in sorted((priv / "submitted" / student / ASSIGNMENT).glob("*.ipynb"))]:
         nb_id = name[:-len(".ipynb")]
@@ -236,15 +264,33 @@ def _last_error(text: str) -> str:
     return (lines[-1] if lines else "nbgrader failed")[:300]
 
 
-def grade_student(course: Path, student: str, notebooks: dict, timeout: int, confine: bool,
-                  index: int, limits: dict) -> dict:
-    """Run the worker for one student in a subprocess; copy its autograded notebooks back."""
+CACHE_FILE = re.compile(r"^(expert_.*\.npz|(wm|agent|loop)_[0-9a-f]{16}\.pt)$")   # pusht's stage cache files
+
+
+def grade_task(bundle: bytes, student: str, notebooks: dict, timeout: int, confine: bool, index: int,
+               limits: dict, shared=None, keep_stages: bool = False) -> dict:
+    """Grade some notebooks of one student, start to end, in a temporary private course.
+
+    Self-contained, so that it runs the same in a thread here or on a Dask worker on another
+    machine: everything comes in as arguments (``bundle`` from ``course_bundle``; ``notebooks``
+    {file name: notebook JSON text}; ``shared`` a folder, or {file name: bytes}, of shared stages)
+    and everything goes out in the return value: {"results": {notebook: entry}, "autograded":
+    {notebook: JSON text}, "stages": {file name: bytes} (only with ``keep_stages``)}. Nothing is
+    left behind."""
     work = Path(tempfile.mkdtemp(prefix="pusht-grade-"))
     os.chmod(work, 0o755)
     try:
-        priv = private_course(course, student, notebooks, work)
+        priv = private_course(bundle, student, notebooks, work)
+        if isinstance(shared, dict):
+            folder = work / "shared"
+            folder.mkdir()
+            for name, data in shared.items():
+                if CACHE_FILE.match(name):
+                    (folder / name).write_bytes(data)
+            shared = str(folder)
         args = {"priv": str(priv), "student": student, "timeout": timeout, "confine": confine,
-                "uid": sandbox.student_uid(index) if confine else None, "limits": limits}
+                "uid": sandbox.student_uid(index) if confine else None, "limits": limits,
+                "shared": str(shared) if shared else None}
         proc = subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "--worker", json.dumps(args)],
                                 cwd=priv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                 env=tool_env(), start_new_session=True)
@@ -265,22 +311,177 @@ def grade_student(course: Path, student: str, notebooks: dict, timeout: int, con
             result = {name: {"ok": False, "error": _last_error(stderr), "scores": {}, "verdicts": {}}
                       for name in notebooks}
         src = priv / "autograded" / student / ASSIGNMENT
-        dest = course / "autograded" / student / ASSIGNMENT     # emptied once per student by grade_class
-        dest.mkdir(parents=True, exist_ok=True)
-        for name in notebooks:
-            if (src / name).exists():
-                shutil.copy(src / name, dest / name)
-        return result
+        out = {"results": result,
+               "autograded": {n: (src / n).read_text(encoding="utf-8") for n in notebooks if (src / n).is_file()}}
+        if keep_stages:
+            out["stages"] = {p.name: p.read_bytes() for p in src.rglob("*")
+                             if p.is_file() and not p.is_symlink() and CACHE_FILE.match(p.name)}
+        return out
     finally:
         shutil.rmtree(work, ignore_errors=True)
 
 
 # --- the whole batch ---------------------------------------------------------------------------
+REFERENCE = "reference-solution"     # the instructor's solutions, graded first when stages are shared
+STATE_FILE = "graded.json"           # per student: what was graded (fingerprint) and its results
+SHARE_FROM = 4                       # share stages from this many students to grade (see grade_class)
+
+
+SHARED_DIR = "shared_stages"         # in the course: a copy of the stages the reference run left
+
+
+def shared_stages(bundle: bytes, course: Path, jobs: int, scheduler, timeout: int, confine: bool,
+                  limits: dict, log=print) -> dict:
+    """The stages no student's code can change, computed once: grade the instructor's solutions as
+    one more (confined) submission and keep the stage files its kernels wrote. Returns them as
+    {file name: bytes} (each task writes them into its own temporary folder, so no path of the
+    course is ever visible in a sandbox) and leaves a copy in ``course/shared_stages`` to look at.
+
+    Which stages qualify is decided by how pusht caches them: a stage is written to the cache only
+    when everything it was computed from is named in its file name (the config fields and the
+    source of the package modules it runs, hashed); a stage given a learner's function (an actor
+    trained with the learner's own lambda-return, say) is never cached, so it is never shared and
+    every student's kernel computes it with their own code. A file a student's kernel looks up
+    under the same name is therefore the same stage, computed from the same inputs. The shared
+    folder is read-only inside every student's sandbox, and nothing a student writes reaches it.
+    """
+    notebooks = {p.name: p.read_text(encoding="utf-8") for p in sorted((ROOT / "solutions").glob("*.ipynb"))}
+    stages, failed = {}, []
+
+    def on_done(task, out):
+        stages.update(out.get("stages", {}))
+        for name, entry in out["results"].items():
+            if not entry["ok"]:
+                failed.append(f"{name} ({entry['error']})")
+            failed.extend(f"{name}: {t}" for t, v in entry["verdicts"].items() if not v["passed"])
+
+    def submit_args(i, task):
+        return (bundle, REFERENCE, {n: notebooks[n] for n in task[1]}, timeout, confine, i, limits, None, True)
+
+    t = time.perf_counter()
+    tasks = _split([REFERENCE], {REFERENCE: notebooks}, jobs if scheduler is None else 2)
+    if scheduler is not None:
+        run_dask(tasks, scheduler, submit_args, on_done, log=log)
+    else:
+        run_local(tasks, jobs, submit_args, on_done)
+    folder = course / SHARED_DIR
+    shutil.rmtree(folder, ignore_errors=True)
+    folder.mkdir()
+    for name, data in stages.items():
+        (folder / name).write_bytes(data)
+    log(f"shared stages: {len(stages)} files ({sum(map(len, stages.values())) / 1e6:.1f} MB) from grading the "
+        f"solutions in {time.perf_counter() - t:.0f} s; every student's kernel reads them")
+    if failed:
+        log("WARNING: the instructor's solutions fail some of their own tests: " + "; ".join(failed)[:2000])
+    return stages
+
+
+def grader_fingerprint(timeout: int, confine: bool, limits: dict) -> str:
+    """Everything besides the submission that decides a student's results: the solutions, the
+    grader's code and tests, the package, the settings. A change to any of it regrades everyone."""
+    h = hashlib.sha256(json.dumps([timeout, confine, sorted(limits.items())]).encode())
+    files = sorted((ROOT / "solutions").glob("*.ipynb")) + sorted(HERE.glob("*.py")) + \
+        sorted((ROOT / "pusht").rglob("*.py"))
+    for p in files:
+        h.update(p.relative_to(ROOT).as_posix().encode() + b"\0" + p.read_bytes())
+    return h.hexdigest()
+
+
+def submission_fingerprint(notebooks: dict, grader: str) -> str:
+    h = hashlib.sha256(grader.encode())
+    for name in sorted(notebooks):
+        h.update(name.encode() + b"\0" + nbformat.writes(notebooks[name]).encode() + b"\0")
+    return h.hexdigest()
+
+
+def _split(students: list, notebooks: dict, jobs: int) -> list:
+    """(student, notebook names) tasks. With at least as many students as cores, one task per
+    student (its notebooks run one after another); with fewer, each student's notebooks are split
+    into that many tasks, so the cores stay busy even for one student."""
+    groups = max(1, jobs // max(1, len(students)))
+    tasks = []
+    for s in students:
+        names = sorted(notebooks[s])
+        for g in range(min(groups, len(names))):
+            tasks.append((s, names[g::groups]))          # 01, 03, 05 | 02, 04, 06 for two groups
+    return tasks
+
+
+def run_local(tasks: list, jobs: int, submit_args, on_done) -> None:
+    """Run grading tasks in a pool of ``jobs`` threads here (each task is its own process)."""
+    from concurrent.futures import as_completed
+
+    with ThreadPoolExecutor(jobs) as pool:
+        futures = {pool.submit(grade_task, *submit_args(i, task)): task for i, task in enumerate(tasks)}
+        for f in as_completed(futures):
+            on_done(futures[f], f.result())
+
+
+def run_dask(tasks: list, scheduler, submit_args, on_done, log=print) -> None:
+    """Run grading tasks on a Dask cluster: ``scheduler`` is its address or a ``distributed.Client``.
+
+    Each task grades in a temporary private course on whichever worker runs it and returns its
+    results; nothing is written on the worker's disk beyond that. A task whose worker dies is
+    rescheduled by Dask on another worker (``retries`` covers a task that fails outright), and the
+    results are merged here by student, so a student is counted once however often it ran."""
+    from distributed import Client, as_completed
+
+    client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+    try:
+        missing = client.run(_worker_can_grade)
+        bad = {w: why for w, why in missing.items() if why}
+        if bad:
+            raise RuntimeError("these Dask workers cannot grade: " + "; ".join(f"{w}: {why}" for w, why in bad.items())
+                               + ". Start each worker from a checkout of the course after `make setup`, with "
+                               "`--preload autograde/dask_preload.py` (README, 'Grading a large class').")
+        futures, scattered = {}, {}
+
+        def once(x):           # large arguments (the course, the shared stages) go to every worker once
+            if isinstance(x, (bytes, dict)) and x:
+                if id(x) not in scattered:
+                    scattered[id(x)] = client.scatter(x, broadcast=True, hash=True)
+                return scattered[id(x)]
+            return x
+        for i, task in enumerate(tasks):
+            args = submit_args(i, task)
+            args = (once(args[0]),) + args[1:7] + (once(args[7]),) + args[8:]
+            f = client.submit(grade_task, *args, key=f"grade-{task[0]}-{i}-{hashlib.sha1(repr(task).encode()).hexdigest()[:8]}",
+                              retries=2, pure=False)
+            futures[f] = task
+        for f in as_completed(futures):
+            on_done(futures[f], f.result())
+    finally:
+        if not isinstance(scheduler, Client):
+            client.close()
+
+
+def _worker_can_grade() -> str:
+    """Run on each Dask worker: '' if it can run grade_task, else why not."""
+    import importlib.util
+
+    for mod in ("grade", "pusht", "nbgrader"):
+        if importlib.util.find_spec(mod) is None:
+            return f"cannot import {mod!r}"
+    return ""
+
+
 def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs: int | None = None,
                 log=print, confine: bool | None = None, limits: dict | None = None,
-                progress: bool = True) -> dict:
-    """Grade every submission in ``submissions``; returns the per-student report."""
+                progress: bool = True, scheduler=None, share: bool | None = None,
+                regrade: bool = False) -> dict:
+    """Grade every submission in ``submissions``; returns the per-student report.
+
+    ``scheduler``: a Dask scheduler address (or ``distributed.Client``) to grade on its workers;
+    None grades here, ``jobs`` tasks at once (default: one per core). ``share``: compute the
+    stages that depend on no student (expert data, the world models and actors the notebooks
+    train from the package's own code at the grading config) once, by grading the instructor's
+    solutions first, and let every student's kernel read them (None: when there are at least
+    SHARE_FROM students to grade). ``regrade``: grade again students whose submission, and
+    everything else that decides their results, did not change since the last run in ``course``
+    (by default their recorded results are reused).
+    """
     from nbgrader.api import Gradebook
+    from tqdm.auto import tqdm
 
     course = course.resolve()
     limits = {**sandbox.DEFAULT_LIMITS, **(limits or {})}
@@ -310,37 +511,63 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
         report[s]["delegated"] = delegated
         prepared[s] = nbs
     jobs = jobs or max(1, (os.cpu_count() or 2))
-    order = sorted(prepared)
-    from concurrent.futures import as_completed
+    students = sorted(s for s in prepared if prepared[s])
 
-    from tqdm.auto import tqdm
-
-    # Each task grades some of one student's notebooks in its own private course and throw-away uid.
-    # With at least as many students as cores, one task per student (the notebooks of a task run
-    # one after another and share its stage cache); with fewer, each student's notebooks are split
-    # into that many tasks, so the cores stay busy even for one student. Only this process writes
-    # the course gradebook (``record``).
-    students = [s for s in order if prepared[s]]
-    groups = max(1, jobs // max(1, len(students)))
-    tasks = []
+    # Unchanged since the last run (same notebooks, same grader): reuse the recorded results.
+    grader = grader_fingerprint(timeout, confine, limits)
+    state_path = course / STATE_FILE
+    state = json.loads(state_path.read_text()) if state_path.exists() else {}
+    prints = {s: submission_fingerprint(prepared[s], grader) for s in students}
+    results = {}
     for s in students:
-        names = sorted(prepared[s])
-        for g in range(min(groups, len(names))):
-            tasks.append((s, names[g::groups]))          # 01, 03, 05 | 02, 04, 06 for two groups
+        old = state.get(s, {})
+        folder = course / "autograded" / s / ASSIGNMENT
+        if not regrade and old.get("fingerprint") == prints[s] and \
+                all((folder / n).is_file() for n in old.get("results", {})):
+            results[s] = old["results"]
+    if results:
+        log(f"{len(results)} of {len(students)} students unchanged since the last grading: their results "
+            f"are reused (regrade to grade them again)")
+    todo = [s for s in students if s not in results]
+    for s in todo:
         shutil.rmtree(course / "autograded" / s / ASSIGNMENT, ignore_errors=True)
-    results, left = {}, {s: sum(1 for t in tasks if t[0] == s) for s in students}
-    with ThreadPoolExecutor(jobs) as pool:
-        futures = {pool.submit(grade_student, course, s, {n: prepared[s][n] for n in names}, timeout, confine,
-                               i, limits): (s, names) for i, (s, names) in enumerate(tasks)}
-        with tqdm(total=len(left), desc=f"grading ({jobs} at a time)", unit="student",
-                  disable=not progress) as bar:
-            for f in as_completed(futures):
-                s, _ = futures[f]
-                results.setdefault(s, {}).update(f.result())
-                left[s] -= 1
-                if not left[s]:                  # the bar counts students: all their tasks done
-                    bar.set_postfix_str(s[:20])
-                    bar.update()
+
+    bundle = course_bundle(course)
+    settings = dict(timeout=timeout, confine=confine, limits=limits)
+    shared = None
+    if share is None:
+        share = len(todo) >= SHARE_FROM
+    if share and todo:
+        shared = shared_stages(bundle, course, jobs, scheduler, log=log, **settings)
+
+    def submit_args(i, task):
+        s, names = task
+        return (bundle, s, {n: nbformat.writes(prepared[s][n]) for n in names}, timeout, confine, i, limits, shared)
+
+    left = {}
+    tasks = _split(todo, prepared, jobs if scheduler is None else 1)
+    for s, _ in tasks:
+        left[s] = left.get(s, 0) + 1
+    where = f"on Dask at {getattr(scheduler, 'scheduler', None) and scheduler.scheduler.address or scheduler}" \
+        if scheduler is not None else f"{jobs} at a time"
+    with tqdm(total=len(todo), desc=f"grading ({where})", unit="student", disable=not progress) as bar:
+        def on_done(task, out):
+            s, _ = task
+            results.setdefault(s, {}).update(out["results"])
+            dest = course / "autograded" / s / ASSIGNMENT
+            dest.mkdir(parents=True, exist_ok=True)
+            for name, text in out["autograded"].items():
+                (dest / name).write_text(text, encoding="utf-8")
+            left[s] -= 1
+            if not left[s]:                  # the bar counts students: all their tasks done
+                bar.set_postfix_str(s[:20])
+                bar.update()
+        if scheduler is not None:
+            run_dask(tasks, scheduler, submit_args, on_done, log=log)
+        else:
+            run_local(tasks, jobs, submit_args, on_done)
+    state = {s: {"fingerprint": prints[s], "results": results[s]} for s in students if s in results}
+    state_path.write_text(json.dumps(state, indent=1, sort_keys=True))
     with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
         for s in report:
             gb.update_or_create_student(s)
@@ -434,6 +661,7 @@ def sanitize_feedback_sources(course: Path, report: dict) -> None:
         folder = course / "autograded" / student / ASSIGNMENT
         for path in folder.glob("*.ipynb"):
             nb = nbformat.read(path, as_version=4)
+            nb.metadata.pop("widgets", None)
             budget = FEEDBACK_NOTEBOOK_CHARS
             for cell in nb.cells:
                 g = repair.gid(cell)
@@ -442,12 +670,34 @@ def sanitize_feedback_sources(course: Path, report: dict) -> None:
                 if g in rep["verdicts"]:
                     score, max_score, msg = rep["verdicts"][g]
                     cell.outputs = [o for o in cell.get("outputs", []) if not
-                                    (o.get("output_type") == "stream" and "[graded outside this kernel]" in o.get("text", ""))]
+                                    (o.get("output_type") == "stream" and ("[graded outside this kernel]" in o.get("text", "")
+                                                                            or o.get("text", "").startswith("[grader] ")))]
                     cell.outputs.append(nbformat.v4.new_output("stream", name="stdout",
                                         text=f"[grader] {g}: {score:g} of {max_score:g} points: {msg}\n"))
                 if cell.cell_type == "code":
+                    # widgets (progress bars) are live views with random ids: nothing in a static page
+                    cell.outputs = _coalesce_streams([o for o in cell.get("outputs", []) if WIDGET not in o.get("data", {})])
                     budget = _cap_outputs(cell, budget)
             nbformat.write(nb, path)
+
+
+def _coalesce_streams(outputs: list) -> list:
+    """Consecutive stdout (or stderr) outputs joined into one, as Jupyter displays them. Where the
+    kernel cut a cell's printed text into messages depends on timing (it flushes on a clock), so
+    without this two gradings of the same notebook could give different feedback pages."""
+    out = []
+    for o in outputs:
+        if (o.get("output_type") == "stream" and out and out[-1].get("output_type") == "stream"
+                and out[-1].get("name") == o.get("name")):
+            out[-1]["text"] = _text(out[-1]) + _text(o)
+        else:
+            out.append(o)
+    return out
+
+
+def _text(o) -> str:
+    t = o.get("text", "")
+    return "".join(t) if isinstance(t, list) else t
 
 
 def _strip_hidden(src: str) -> str:
@@ -509,7 +759,7 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if argv[:1] == ["--worker"]:
         a = json.loads(argv[1])
-        out = worker(Path(a["priv"]), a["student"], a["timeout"], a["confine"], a["uid"], a["limits"])
+        out = worker(Path(a["priv"]), a["student"], a["timeout"], a["confine"], a["uid"], a["limits"], a.get("shared"))
         print(json.dumps(out))
         return 0
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -517,13 +767,20 @@ def main(argv=None) -> int:
     p.add_argument("--course", type=Path, default=HERE, help="nbgrader course folder (default: autograde/)")
     p.add_argument("--timeout", type=int, default=120, help="seconds per cell before it is interrupted")
     p.add_argument("--jobs", type=int, default=None, help="grading tasks at once (default: one per core); fewer students than that split their notebooks")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="grade on a Dask cluster, e.g. tcp://10.0.0.5:8786 (README: 'Grading a large class')")
+    p.add_argument("--regrade", action="store_true",
+                   help="grade again students whose submissions did not change since the last run")
+    p.add_argument("--share", choices=("auto", "yes", "no"), default="auto",
+                   help=f"compute the stages no student can change once, from the solutions (auto: from {SHARE_FROM} students)")
     p.add_argument("--no-confine", action="store_true",
                    help="run student code unconfined (only for trusted notebooks; prints a warning)")
     args = p.parse_args(argv)
     if not args.submissions.exists():
         p.error(f"{args.submissions} does not exist")
     report = grade_class(args.submissions, args.course, args.timeout, args.jobs,
-                         confine=False if args.no_confine else None)
+                         confine=False if args.no_confine else None, scheduler=args.scheduler,
+                         share={"auto": None, "yes": True, "no": False}[args.share], regrade=args.regrade)
     print(f"graded {len(report)} students: scores in {args.course / 'grades.csv'}, per-file notes in "
           f"{args.course / 'report.csv'}, feedback in {args.course / 'feedback'}/")
     return 0

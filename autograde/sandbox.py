@@ -40,6 +40,7 @@ from pathlib import Path
 import pusht
 
 KERNEL_NAME = "pusht-sandbox"
+SHARED_CACHE_ENV = "PUSHT_SHARED_CACHE"   # the same name as pusht.data.SHARED_CACHE_ENV (tested)
 PACKAGE_DIR = Path(pusht.__file__).resolve().parent
 DEFAULT_LIMITS = {
     "memory_bytes": 6 * 2 ** 30,      # address space per process (torch reserves a lot of it)
@@ -139,7 +140,7 @@ def bwrap_command(workdir: Path, writable: list[Path], uid: int | None,
     return cmd
 
 
-PASS_ENV = ("NBGRADER_EXECUTION", "PUSHT_GRADING_DIR", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
+PASS_ENV = ("NBGRADER_EXECUTION", "PUSHT_GRADING_DIR", "TQDM_DISABLE", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
             "MKL_CBWR", "OPENBLAS_CORETYPE", "OPENBLAS_L2_SIZE", "PUSHT_SMOKE")
 
 
@@ -147,7 +148,8 @@ def write_kernelspec(dest: Path, settings: dict) -> Path:
     """Write the ``pusht-sandbox`` kernel spec under ``dest/kernels``; put ``dest`` on JUPYTER_PATH.
 
     ``settings``: ``socket_dir`` (where the kernel's Unix sockets are made), ``grading_dir``,
-    ``uid``, ``limits``.
+    ``uid``, ``limits``, ``shared_cache`` (a folder of stages shared by the batch, bound read-only,
+    or None).
     """
     spec_dir = dest / "kernels" / KERNEL_NAME
     spec_dir.mkdir(parents=True, exist_ok=True)
@@ -169,8 +171,26 @@ def _chown_tree(path: Path, uid: int) -> None:
                 pass
 
 
+def die_with_parent() -> None:
+    """Have the kernel deliver SIGKILL to this process when its parent dies (Linux's
+    PR_SET_PDEATHSIG), so a grading process whose coordinator was killed (a Dask worker lost mid-
+    task, say) does not run on, orphaned. Elsewhere it does nothing."""
+    if not sys.platform.startswith("linux"):
+        return
+    import ctypes
+
+    parent = os.getppid()
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)   # 1 = PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != parent:       # the parent died before the request was made
+        os.kill(os.getpid(), signal.SIGKILL)
+
+
 def launch(settings_file: str, connection_file: str) -> int:
     """Run ipykernel confined; kill the whole sandbox when the wall clock runs out."""
+    die_with_parent()
     s = json.loads(Path(settings_file).read_text())
     workdir = Path.cwd()
     grading = Path(s["grading_dir"])
@@ -182,11 +202,15 @@ def launch(settings_file: str, connection_file: str) -> int:
             _chown_tree(p, uid)
     env = {k: os.environ[k] for k in PASS_ENV if k in os.environ}
     env["PUSHT_GRADING_DIR"] = str(grading)
+    readonly = [Path(connection_file).resolve(), grading / "cases"]
+    if s.get("shared_cache"):
+        env[SHARED_CACHE_ENV] = s["shared_cache"]
+        readonly.append(Path(s["shared_cache"]))
     conn = Path(connection_file).resolve()
     if uid is not None:
         os.chmod(conn, 0o644)          # the kernel reads its own connection file (key included)
     cmd = bwrap_command(workdir, [Path(s["socket_dir"]), results], uid,
-                        readonly=[conn, grading / "cases"], limits=s.get("limits"), env=env)
+                        readonly=readonly, limits=s.get("limits"), env=env)
     cmd += [sys.executable, "-m", "ipykernel_launcher", "-f", str(conn),
             "--HistoryManager.hist_file=:memory:"]
     proc = subprocess.Popen(cmd)

@@ -54,13 +54,13 @@ def main(argv=None) -> int:
             t = time.perf_counter()
             out = fn(*a, **k)
             phases[name] = phases.get(name, 0.0) + time.perf_counter() - t
-            if name == "grade_student":
-                for nb, entry in out.items():
+            if name == "grade_task":
+                for nb, entry in out["results"].items():
                     phases[f"  autograde {nb} (nbgrader, kernel included)"] = entry.get("seconds", float("nan"))
             return out
         return wrapper
 
-    for name in ("prepare_course", "grade_student", "record", "sanitize_feedback_sources", "export"):
+    for name in ("prepare_course", "grade_task", "record", "sanitize_feedback_sources", "export"):
         setattr(grade, name, timed(name, getattr(grade, name)))
     api = grade.nbgrader_api
     grade.nbgrader_api = lambda course: _timed_api(api(course), phases)
@@ -77,7 +77,7 @@ def main(argv=None) -> int:
             print(f"one complete submission, {'confined' if confine else 'NOT confined'}: {seconds:.1f} s "
                   f"(test points {score:g})", flush=True)
             if confine or len(modes) == 1:
-                print("  where it went (grade_student: summed over notebooks, which run in parallel):")
+                print("  where it went (grade_task: summed over notebooks, which run in parallel):")
                 for name, sec in phases.items():
                     print(f"  {sec:7.1f} s  {name}")
             phases.clear()

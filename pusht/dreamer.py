@@ -30,7 +30,7 @@ import torch
 from .agent import ActorCritic
 from .analysis import shift_metrics
 from .config import Config, field_docs, make_config
-from .data import EVAL_SEED_BASE, MONITOR_SEED_BASE, load_expert_data, start_seeds
+from .data import EVAL_SEED_BASE, MONITOR_SEED_BASE, cached_file, load_expert_data, start_seeds
 from .ensemble import EnsembleWorldModel, disagreement_metrics, ensemble_history
 from .env import ACT_DIM, OBS_DIM, OBS_NAMES
 from .evaluate import policy_of, real_rollout, two_world_eval
@@ -110,8 +110,9 @@ def _cache_path(model_cache, kind: str, cfg: Config, names, modules) -> Path | N
 
 
 def _cached(path, build):
-    if path is not None and path.exists():
-        return torch.load(path, weights_only=False)
+    found = None if path is None else cached_file(path)
+    if found is not None:
+        return torch.load(found, weights_only=False)
     stage = build()
     if path is not None:
         path.parent.mkdir(parents=True, exist_ok=True)

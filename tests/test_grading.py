@@ -8,6 +8,7 @@ This is the instructor's one command (autograde/grade.py) on a synthetic class
 import csv
 import sys
 import time
+import zipfile
 from pathlib import Path
 
 import pytest
@@ -134,16 +135,40 @@ def test_mark_scheme_reaches_students_through_feedback_only(graded):
     assert "Mark scheme" not in release and "pleasing the dream" not in release
 
 
-def test_regrading_gives_the_same_grades_and_keeps_manual_grades(graded):
+def test_regrading_an_unchanged_class_reuses_its_results_and_keeps_manual_grades(graded):
     course, _, subs = graded
     set_manual_grade("perfect", "04_imagination_gap", "ex1_sentence", 1.0, "Clear and complete.",
                      course=course)
     before = grades_csv(course)
     with open(course / "manual_grades.csv", "a", newline="") as f:       # a hand edit out of range
         csv.writer(f).writerow(["perfect", "05_horizon", "ex2_sentence", "7", "too generous"])
-    report = grade.grade_class(subs, course, timeout=TIMEOUT, log=print)
+    lines = []
+    report = grade.grade_class(subs, course, timeout=TIMEOUT, log=lines.append)
+    graded_ones = len(STUDENTS) - 1          # "garbage" hands in nothing that can be graded
+    assert f"{graded_ones} of {graded_ones} students unchanged" in "\n".join(lines)
     after = grades_csv(course)
     assert after == before
     assert cell_scores(course, "perfect", "04_imagination_gap")["ex1_sentence"] == 1.0
     assert cell_scores(course, "perfect", "05_horizon")["ex2_sentence"] in (None, 0)
     assert any("refused" in n and "ex2_sentence" in n for n in report["perfect"]["notes"])
+
+
+def test_a_changed_submission_is_graded_again_and_only_it(graded, tmp_path):
+    """The student 'wrong' hands in a corrected reward notebook: only they are graded again."""
+    course, _, subs = graded
+    before = grades_csv(course)
+    fixed = tmp_path / "resubmitted.zip"
+    with zipfile.ZipFile(subs) as src, zipfile.ZipFile(fixed, "w") as dst:
+        for name in src.namelist():
+            data = src.read(name)
+            if name == "wrong_02_reward.ipynb":
+                data = src.read("perfect_02_reward.ipynb")
+            dst.writestr(name, data)
+    lines = []
+    grade.grade_class(fixed, course, timeout=TIMEOUT, log=lines.append)
+    graded_ones = len(STUDENTS) - 1
+    assert f"{graded_ones - 1} of {graded_ones} students unchanged" in "\n".join(lines)
+    after = grades_csv(course)
+    assert after["wrong"] > before["wrong"]
+    assert cell_scores(course, "wrong", "02_reward")["reward_impl_tests"] > 0
+    assert {s: v for s, v in after.items() if s != "wrong"} == {s: v for s, v in before.items() if s != "wrong"}

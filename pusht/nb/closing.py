@@ -622,8 +622,8 @@ def ensemble_sentence(single_m: dict, ens_m: dict, penalty: float | None = None)
     # the most cautious comparison the metrics allow: the larger disagreement figure against the
     # smaller error figure (the disagreement is a mean over steps, the error a value at one step)
     if max(dis_tr, dis_ev) < min(err_tr, err_ev):
-        s += (f"The members are closer to each other than their mean is to reality (about "
-              f"{min(err_tr, err_ev) / max(dis_tr, dis_ev):.0f}x): most of the error is one they share, a bias "
+        s += (f"The members are closer to each other than their mean is to reality (by a factor of at least "
+              f"{min(err_tr, err_ev) / max(dis_tr, dis_ev):.1f}, the smaller error over the larger disagreement): most of the error is one they share, a bias "
               "of the data they all learned from, and a penalty on disagreement cannot see it. ")
     else:
         s += "Their disagreement is as large as their error from reality: here it does flag the error. "
