@@ -6,7 +6,8 @@
 Builds a class of ``--students`` students by cycling through the synthetic hand-ins of
 ``autograde/synthetic_class.py`` (correct, Colab-saved, wrong, out-of-order prediction, invalid
 prediction, raising, tampered, not a notebook; ``loops``, a cell that never returns, is left out:
-its cost is the per-cell timeout, which an instructor sets), each under its own id, and grades it
+its cost is the per-cell timeout, which an instructor sets), each under its own id and each a
+complete hand-in of six notebooks (the kind's faulty ones in place of correct ones), and grades it
 once as ``make grade`` would (default parallelism, stages shared, confined where bubblewrap is
 here). Prints the wall time and the seconds per student, amortised. ``--compare`` then grades
 that many of the students (or all) again, one at a time, each in its own batch, without shared
@@ -37,7 +38,9 @@ KINDS = ("perfect", "colab", "wrong", "order", "badpred", "raises", "tamper", "g
 
 
 def class_zip(executed: Path, n: int, dest: Path) -> list[str]:
-    """A zip of ``n`` students cycling through KINDS; returns their ids."""
+    """A zip of ``n`` students cycling through KINDS; returns their ids. Every student hands in all
+    six notebooks: the correct ones, with the kind's own notebooks in place of those it replaces
+    (the synthetic kinds other than ``perfect`` hand in only the notebooks they get wrong)."""
     members = build(executed)
     ids = []
     with zipfile.ZipFile(dest, "w") as zf:
@@ -45,9 +48,10 @@ def class_zip(executed: Path, n: int, dest: Path) -> list[str]:
             kind = KINDS[i % len(KINDS)]
             sid = f"{kind}{i:03d}"
             ids.append(sid)
-            for name, data in members.items():
-                if name.startswith(f"{kind}_"):
-                    zf.writestr(f"{sid}_{name[len(kind) + 1:]}", data)
+            files = {name[len("perfect_"):]: data for name, data in members.items() if name.startswith("perfect_")}
+            files.update({name[len(kind) + 1:]: data for name, data in members.items() if name.startswith(f"{kind}_")})
+            for name, data in sorted(files.items()):
+                zf.writestr(f"{sid}_{name}", data)
     return ids
 
 

@@ -120,3 +120,12 @@ def test_a_worker_that_cannot_grade_is_named(client, monkeypatch):
     monkeypatch.setattr(grade, "_worker_can_grade", lambda: "cannot import 'nbgrader'")
     with pytest.raises(RuntimeError, match="cannot import 'nbgrader'.*preload"):
         grade.run_dask([("someone", ["02_reward.ipynb"])], client, lambda i, t: None, lambda t, o: None)
+
+
+def test_feedback_joins_the_printed_text_that_the_kernel_happened_to_send_in_pieces():
+    piece = lambda name, text: {"output_type": "stream", "name": name, "text": text}  # noqa: E731
+    shown = {"output_type": "display_data", "data": {"text/plain": "fig"}, "metadata": {}}
+    outs = grade._coalesce_streams([piece("stdout", "a\n"), piece("stdout", ["b\n", "c\n"]), piece("stderr", "w\n"),
+                                    piece("stdout", "d\n"), shown, piece("stdout", "e\n")])
+    assert [(o["output_type"], o.get("text")) for o in outs] == [
+        ("stream", "a\nb\nc\n"), ("stream", "w\n"), ("stream", "d\n"), ("display_data", None), ("stream", "e\n")]
