@@ -29,9 +29,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "autograde"))
 sys.path.insert(0, str(ROOT / "scripts"))
+sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import grade  # noqa: E402
 import sandbox  # noqa: E402
+from bench_grading import executed_notebooks  # noqa: E402
 from synthetic_class import build  # noqa: E402
 
 KINDS = ("perfect", "colab", "wrong", "order", "badpred", "raises", "tamper", "garbage")
@@ -78,16 +80,8 @@ def main(argv=None) -> int:
     p.add_argument("--scheduler", default=None, help="grade on this Dask scheduler instead of here")
     args = p.parse_args(argv)
     tmp = Path(tempfile.mkdtemp(prefix="bench-class-"))
-    executed = args.executed
-    if executed is None:
-        from chapter import execute
-
-        executed = tmp / "executed"
-        executed.mkdir()
-        for nb in sorted((ROOT / "solutions").glob("*.ipynb")):
-            execute(nb, executed, smoke=True)
     subs = tmp / "class.zip"
-    ids = class_zip(executed, args.students, subs)
+    ids = class_zip(executed_notebooks(args.executed, tmp), args.students, subs)
     jobs = args.jobs or os.cpu_count()
     print(f"host: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, python "
           f"{platform.python_version()}; confined: {sandbox.available()[0]}; {len(ids)} students "

@@ -28,13 +28,8 @@ import sandbox  # noqa: E402
 from synthetic_class import build  # noqa: E402
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--executed", type=Path, help="executed solution notebooks (default: run them now)")
-    p.add_argument("--repeats", type=int, default=1)
-    args = p.parse_args(argv)
-    tmp = Path(tempfile.mkdtemp(prefix="bench-grading-"))
-    executed = args.executed
+def executed_notebooks(executed: Path | None, tmp: Path) -> Path:
+    """``executed``, or (None) the solution notebooks executed now in smoke mode, under ``tmp``."""
     if executed is None:
         from chapter import execute
 
@@ -42,6 +37,16 @@ def main(argv=None) -> int:
         executed.mkdir()
         for nb in sorted((ROOT / "solutions").glob("*.ipynb")):
             execute(nb, executed, smoke=True)
+    return executed
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--executed", type=Path, help="executed solution notebooks (default: run them now)")
+    p.add_argument("--repeats", type=int, default=1)
+    args = p.parse_args(argv)
+    tmp = Path(tempfile.mkdtemp(prefix="bench-grading-"))
+    executed = executed_notebooks(args.executed, tmp)
     subs = tmp / "one.zip"
     with zipfile.ZipFile(subs, "w") as zf:
         for name, data in build(executed).items():

@@ -56,3 +56,23 @@ def test_host_description_names_the_cpu_family_where_linux_tells_it():
     cpuinfo = Path("/proc/cpuinfo")
     if cpuinfo.exists() and "cpu family" in cpuinfo.read_text():
         assert "family" in desc
+
+
+def test_the_class_benchmark_hands_in_six_notebooks_per_student_faults_included(executed_notebooks, tmp_path):
+    import sys
+    import zipfile
+    from collections import Counter
+
+    for sub in ("autograde", "scripts", "benchmarks"):
+        sys.path.insert(0, str(ROOT / sub))
+    from bench_class import KINDS, class_zip
+
+    executed, _ = executed_notebooks
+    ids = class_zip(executed, len(KINDS) + 2, tmp_path / "class.zip")
+    with zipfile.ZipFile(tmp_path / "class.zip") as zf:
+        names = zf.namelist()
+        per_student = Counter(n.split("_", 1)[0] for n in names)
+        assert sorted(per_student) == sorted(ids) and set(per_student.values()) == {6}
+        assert zf.read("wrong002_02_reward.ipynb") != zf.read("perfect000_02_reward.ipynb")   # the fault is in
+        assert zf.read("wrong002_01_world_model.ipynb") == zf.read("perfect000_01_world_model.ipynb")
+    assert [i[:-3] for i in ids[:len(KINDS)]] == list(KINDS)
