@@ -186,7 +186,7 @@ def private_course(bundle: bytes, student: str, notebooks: dict, work: Path) -> 
     dest = priv / "submitted" / student / ASSIGNMENT
     dest.mkdir(parents=True)
     for name, nb in notebooks.items():
-        (dest / name).write_text(nb if isinstance(nb, str) else nbformat.writes(nb), encoding="utf-8")
+        (dest / name).write_text(nb, encoding="utf-8")          # notebook JSON text
     (dest / "timestamp.txt").write_text("2026-01-01 00:00:00.000000 UTC")   # fixed: regrades match
     return priv
 
@@ -360,10 +360,7 @@ def shared_stages(bundle: bytes, course: Path, jobs: int, scheduler, timeout: in
 
     t = time.perf_counter()
     tasks = _split([REFERENCE], {REFERENCE: notebooks}, jobs if scheduler is None else 2)
-    if scheduler is not None:
-        run_dask(tasks, scheduler, submit_args, on_done, log=log)
-    else:
-        run_local(tasks, jobs, submit_args, on_done)
+    run_tasks(tasks, jobs, scheduler, submit_args, on_done, log)
     folder = course / SHARED_DIR
     shutil.rmtree(folder, ignore_errors=True)
     folder.mkdir()
@@ -405,6 +402,16 @@ def _split(students: list, notebooks: dict, jobs: int) -> list:
         for g in range(min(groups, len(names))):
             tasks.append((s, names[g::groups]))          # 01, 03, 05 | 02, 04, 06 for two groups
     return tasks
+
+
+def run_tasks(tasks: list, jobs: int, scheduler, submit_args, on_done, log=print) -> None:
+    """Run grading tasks on the Dask cluster ``scheduler`` if given, else here, ``jobs`` at a time.
+    ``submit_args(i, task)`` gives grade_task's arguments; ``on_done(task, result)`` takes each result
+    (in this process, in the order they finish)."""
+    if scheduler is not None:
+        run_dask(tasks, scheduler, submit_args, on_done, log=log)
+    else:
+        run_local(tasks, jobs, submit_args, on_done)
 
 
 def run_local(tasks: list, jobs: int, submit_args, on_done) -> None:
@@ -562,10 +569,7 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
             if not left[s]:                  # the bar counts students: all their tasks done
                 bar.set_postfix_str(s[:20])
                 bar.update()
-        if scheduler is not None:
-            run_dask(tasks, scheduler, submit_args, on_done, log=log)
-        else:
-            run_local(tasks, jobs, submit_args, on_done)
+        run_tasks(tasks, jobs, scheduler, submit_args, on_done, log)
     state = {s: {"fingerprint": prints[s], "results": results[s]} for s in students if s in results}
     state_path.write_text(json.dumps(state, indent=1, sort_keys=True))
     with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
