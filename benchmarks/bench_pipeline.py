@@ -1,0 +1,72 @@
+"""Where the default pipeline's wall-clock goes, one fresh process per repeat.
+
+    python benchmarks/bench_pipeline.py [--repeats 3] [--seed 0]
+
+Each repeat starts a new interpreter (cold, as ``python -m pusht.dreamer`` is) and times, in order:
+``import torch``; the rest of ``import pusht.dreamer``; the first ``torch.optim.Adam`` (its first
+call imports ``torch._dynamo``, once per process, which every notebook kernel that trains pays);
+then the pipeline's own phases from ``run()``'s ``timing`` (expert data, world model, imagination,
+evaluation), with the stage cache off. Prints one row per repeat and the medians. Speed-ups to the
+pipeline should show here first; ``bench_vs.py`` compares whole runs against an older commit.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+CHILD = r"""
+import json, sys, time
+t0 = time.perf_counter()
+import torch
+t1 = time.perf_counter()
+from pusht.config import make_config
+from pusht.dreamer import run
+t2 = time.perf_counter()
+torch.optim.Adam([torch.zeros(1, requires_grad=True)]).zero_grad()
+t3 = time.perf_counter()
+res = run(make_config(seed=int(sys.argv[1])), log=None)
+t4 = time.perf_counter()
+print(json.dumps({"import_torch_s": t1 - t0, "import_pusht_s": t2 - t1, "first_optimizer_s": t3 - t2,
+                  **{k: v for k, v in res.timing.items() if k != "total_s"}, "run_s": t4 - t3,
+                  "process_s": t4 - t0}))
+"""
+
+COLUMNS = ("import_torch_s", "import_pusht_s", "first_optimizer_s", "data_s", "world_model_s",
+           "imagination_s", "eval_s", "process_s")
+
+
+def one(seed: int) -> dict:
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    out = subprocess.run([sys.executable, "-c", CHILD, str(seed)], cwd=ROOT, env=env, check=True,
+                         capture_output=True, text=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--seed", type=int, default=0)
+    args = p.parse_args(argv)
+    print(f"host: {platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}; "
+          f"seed {args.seed}, default config, no stage cache, a fresh process per repeat")
+    print("  " + " ".join(f"{c[:-2]:>17}" for c in COLUMNS))
+    rows = []
+    for _ in range(args.repeats):
+        row = one(args.seed)
+        rows.append(row)
+        print("  " + " ".join(f"{row[c]:17.2f}" for c in COLUMNS), flush=True)
+    print("  " + " ".join(f"{statistics.median(r[c] for r in rows):17.2f}" for c in COLUMNS) + "  (median, s)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
