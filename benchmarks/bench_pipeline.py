@@ -6,8 +6,10 @@ Each repeat starts a new interpreter (cold, as ``python -m pusht.dreamer`` is) a
 ``import torch``; the rest of ``import pusht.dreamer``; the first ``torch.optim.Adam`` (its first
 call imports ``torch._dynamo``, once per process, which every notebook kernel that trains pays);
 then the pipeline's own phases from ``run()``'s ``timing`` (expert data, world model, imagination,
-evaluation), with the stage cache off. Prints one row per repeat and the medians. Speed-ups to the
-pipeline should show here first; ``bench_vs.py`` compares whole runs against an older commit.
+evaluation), with the stage cache off. Prints one row per repeat and the medians. The phases are
+the same timing.json split ``bench.py`` records as medians in wallclock.csv; what this adds is the
+split of what comes before ``run()`` and every repeat's row. ``bench_vs.py`` compares whole runs
+against an older commit.
 """
 
 from __future__ import annotations
@@ -15,13 +17,15 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import statistics
 import subprocess
 import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
+
+from bench import host_description  # noqa: E402  (CPU model and family, as wallclock.csv names hosts)
 
 CHILD = r"""
 import json, sys, time
@@ -56,8 +60,8 @@ def main(argv=None) -> int:
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--seed", type=int, default=0)
     args = p.parse_args(argv)
-    print(f"host: {platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}; "
-          f"seed {args.seed}, default config, no stage cache, a fresh process per repeat")
+    print(f"host: {host_description()}; seed {args.seed}, default config, no stage cache, "
+          f"a fresh process per repeat")
     print("  " + " ".join(f"{c[:-2]:>17}" for c in COLUMNS))
     rows = []
     for _ in range(args.repeats):
