@@ -26,6 +26,7 @@ import torch.nn.functional as F
 from torch import nn
 
 from .grading import reference
+from .optim import Adam
 from .reward import reward_from_obs
 
 
@@ -175,7 +176,7 @@ def train_in_imagination(wm, agent, starts_obs, starts_act, mean, std, cfg, gen:
     if loss_fn is None:              # a learner's own loss_fn uses their own lambda-return
         package_losses = losses_for(cfg.critic_wiring)
         loss_fn = lambda *args: package_losses(*args, return_fn=return_fn)  # noqa: E731
-    opt = torch.optim.Adam(agent.parameters(), lr=cfg.actor_lr, fused=True)
+    opt = Adam(agent.parameters(), lr=cfg.actor_lr)
     hist = {"imag_reward": [], "imag_return": [], "critic_loss": [], "log_std": [], "monitor_iters": [],
             "monitor_real_reward": []}
     if hasattr(wm, "disagreement"):

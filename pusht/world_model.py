@@ -31,6 +31,8 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
+from .optim import Adam
+
 
 def mlp(inp: int, hidden: int, out: int, final: nn.Module | None = None) -> nn.Sequential:
     """One hidden layer: the world model is deliberately tiny."""
@@ -165,7 +167,7 @@ def train_world_model(wm, obs, act, cfg, gen: torch.Generator, progress=None, lo
     ``obs`` (N, T+1, D) and ``act`` (N, T, A) are normalised tensors; ``gen`` orders the batches.
     ``progress`` wraps the epoch range (e.g. ``tqdm``). ``log`` gets a line every 15 epochs.
     """
-    opt = torch.optim.Adam(wm.parameters(), lr=cfg.wm_lr, fused=True)
+    opt = Adam(wm.parameters(), lr=cfg.wm_lr)
     recon_hist, dyn_hist = [], []
     epochs = range(cfg.wm_epochs)
     for epoch in (progress(epochs) if progress else epochs):
