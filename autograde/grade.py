@@ -72,6 +72,7 @@ EXERCISES = {"ex1": "04_imagination_gap", "ex2": "05_horizon", "ex3": "06_closin
 FEEDBACK_OUTPUT_CHARS = 20_000      # per output in a feedback page; the rest is cut with a note
 FEEDBACK_NOTEBOOK_CHARS = 2_000_000  # all outputs of one notebook together
 WIDGET = "application/vnd.jupyter.widget-view+json"
+ZYGOTE_ENV = "PUSHT_GRADING_ZYGOTE"   # "0": a new sandboxed kernel per notebook, no kernel factory
 HIDDEN_NOTE = "# (hidden tests: run by the grader; their verdict is printed below)\n"
 
 
@@ -196,9 +197,6 @@ def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | Non
     """Autograde every notebook of one student in the private course ``priv`` (runs in its own
     process). Returns {notebook: {"ok", "error", "scores": {grade_id: auto score}, "verdicts"}}.
     ``shared``: a folder of stages computed once for the whole batch, which the kernels read."""
-    from nbgrader.api import Gradebook
-    from nbgrader.apps import NbGraderAPI
-    from nbgrader.coursedir import CourseDirectory
     from traitlets.config import PyFileConfigLoader
 
     sandbox.die_with_parent()
@@ -221,20 +219,52 @@ def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | Non
     config.Execute.shutdown_kernel = "immediate"
     config.KernelManager.transport = "ipc"
     config.KernelManager.ip = str(sockets / "k")
+    zygote = None
     if confine:
-        sandbox.write_kernelspec(run / "jupyter", {"socket_dir": str(sockets), "grading_dir": str(grading),
-                                                   "uid": uid, "limits": limits, "shared_cache": shared})
+        settings = {"socket_dir": str(sockets), "grading_dir": str(grading), "uid": uid, "limits": limits,
+                    "shared_cache": shared}
+        if os.environ.get(ZYGOTE_ENV, "1") != "0":
+            # one kernel factory for all of this student's notebooks, in a sandbox around the folder
+            # nbgrader runs them in (sandbox.Zygote): no kernel pays for Python, ipykernel and torch
+            workdir = priv / "autograded" / student / ASSIGNMENT
+            workdir.mkdir(parents=True, exist_ok=True)
+            settings.update(zygote_state=str(run / "zygote.json"), connections_dir=str(run / "connections"))
+            zygote = sandbox.Zygote(settings, workdir)
+        sandbox.write_kernelspec(run / "jupyter", settings)
         os.environ["JUPYTER_PATH"] = str(run / "jupyter")
         config.Execute.kernel_name = sandbox.KERNEL_NAME
     else:
         os.environ["PUSHT_GRADING_DIR"] = str(grading)
         if shared:
             os.environ[sandbox.SHARED_CACHE_ENV] = shared
+    try:
+        return _grade_notebooks(priv, student, config, grading, zygote)
+    finally:
+        if zygote is not None:
+            zygote.stop()
+
+
+def _empty(folder: Path) -> None:
+    """Remove everything in ``folder`` but the folder (a sandbox may have it bound)."""
+    folder.mkdir(exist_ok=True)
+    for p in folder.iterdir():
+        if p.is_dir() and not p.is_symlink():
+            shutil.rmtree(p, ignore_errors=True)
+        else:
+            p.unlink(missing_ok=True)
+
+
+def _grade_notebooks(priv: Path, student: str, config, grading: Path, zygote) -> dict:
+    from nbgrader.api import Gradebook
+    from nbgrader.apps import NbGraderAPI
+    from nbgrader.coursedir import CourseDirectory
+
     out = {}
     for name in [p.name for p in sorted((priv / "submitted" / student / ASSIGNMENT).glob("*.ipynb"))]:
         nb_id = name[:-len(".ipynb")]
-        shutil.rmtree(grading / "results", ignore_errors=True)
-        (grading / "results").mkdir()
+        _empty(grading / "results")
+        if zygote is not None:
+            zygote.ensure()
         coursedir = CourseDirectory(config=config)
         coursedir.notebook_id = nb_id
         api = NbGraderAPI(coursedir=coursedir, config=config)
@@ -673,9 +703,7 @@ def sanitize_feedback_sources(course: Path, report: dict) -> None:
                     cell.source = _strip_hidden(cell.source)
                 if g in rep["verdicts"]:
                     score, max_score, msg = rep["verdicts"][g]
-                    cell.outputs = [o for o in cell.get("outputs", []) if not
-                                    (o.get("output_type") == "stream" and ("[graded outside this kernel]" in o.get("text", "")
-                                                                            or o.get("text", "").startswith("[grader] ")))]
+                    cell.outputs = _without_grader_lines(cell.get("outputs", []))
                     cell.outputs.append(nbformat.v4.new_output("stream", name="stdout",
                                         text=f"[grader] {g}: {score:g} of {max_score:g} points: {msg}\n"))
                 if cell.cell_type == "code":
@@ -683,6 +711,22 @@ def sanitize_feedback_sources(course: Path, report: dict) -> None:
                     cell.outputs = _coalesce_streams([o for o in cell.get("outputs", []) if WIDGET not in o.get("data", {})])
                     budget = _cap_outputs(cell, budget)
             nbformat.write(nb, path)
+
+
+def _without_grader_lines(outputs: list) -> list:
+    """A test cell's outputs without the kernel's own grading lines (the verdict replaces them).
+    Line by line, after joining the streams: where the kernel cut the printed text into messages
+    depends on timing, so a student's line can share a message with a grading line."""
+    out = []
+    for o in _coalesce_streams(outputs):
+        if o.get("output_type") == "stream":
+            lines = [l for l in _text(o).splitlines(keepends=True)
+                     if "[graded outside this kernel]" not in l and not l.startswith("[grader] ")]
+            if not lines:
+                continue
+            o["text"] = "".join(lines)
+        out.append(o)
+    return out
 
 
 def _coalesce_streams(outputs: list) -> list:

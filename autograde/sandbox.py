@@ -17,6 +17,12 @@ notebook's folder as working directory, and this launcher starts ipykernel insid
   new privileges; rlimits on address space, process count, CPU seconds and file size;
 * a wall clock per notebook: the launcher kills the sandbox when it runs out.
 
+One sandbox per student, not per notebook, is what the grader starts (``Zygote``): all of a
+student's notebooks run in one folder, so it holds ``pusht.zygote``, a process that has imported
+ipykernel, torch and the package once, and ``launch`` has it fork each notebook's kernel (the same
+folder, uid and limits; every process the kernel started is killed when it ends). Where no
+factory answers, ``launch`` starts a sandbox of its own around the kernel, as described above.
+
 Why bubblewrap: it is a small, audited, well-kept tool (it is the sandbox under Flatpak), packaged
 by Debian (``apt-get install bubblewrap``), needs no daemon, no image and no root-owned service,
 and starts in milliseconds; a container per notebook would need a container runtime the CI
@@ -30,10 +36,13 @@ from __future__ import annotations
 
 import json
 import os
+import secrets
 import shutil
 import signal
+import socket
 import subprocess
 import sys
+import time
 from functools import lru_cache
 from pathlib import Path
 
@@ -188,11 +197,10 @@ def die_with_parent() -> None:
         os.kill(os.getpid(), signal.SIGKILL)
 
 
-def launch(settings_file: str, connection_file: str) -> int:
-    """Run ipykernel confined; kill the whole sandbox when the wall clock runs out."""
-    die_with_parent()
-    s = json.loads(Path(settings_file).read_text())
-    workdir = Path.cwd()
+def _confinement(s: dict, workdir: Path, readonly: list[Path]) -> list[str]:
+    """The bwrap command (without the program) of a kernel's sandbox under settings ``s``: the
+    student's ``workdir``, the socket folder and the results writable; ``readonly``, the cases and
+    the shared stages read-only. Hands those folders to the student's uid first (root only)."""
     grading = Path(s["grading_dir"])
     uid = s.get("uid")
     results = grading / "results"
@@ -202,15 +210,35 @@ def launch(settings_file: str, connection_file: str) -> int:
             _chown_tree(p, uid)
     env = {k: os.environ[k] for k in PASS_ENV if k in os.environ}
     env["PUSHT_GRADING_DIR"] = str(grading)
-    readonly = [Path(connection_file).resolve(), grading / "cases"]
+    readonly = list(readonly) + [grading / "cases"]
     if s.get("shared_cache"):
         env[SHARED_CACHE_ENV] = s["shared_cache"]
         readonly.append(Path(s["shared_cache"]))
+    return bwrap_command(workdir, [Path(s["socket_dir"]), results], uid,
+                         readonly=readonly, limits=s.get("limits"), env=env)
+
+
+def _wall(s: dict) -> float:
+    return float(s.get("limits", {}).get("wall_seconds", DEFAULT_LIMITS["wall_seconds"]))
+
+
+def launch(settings_file: str, connection_file: str) -> int:
+    """Run ipykernel confined; kill the whole sandbox when the wall clock runs out.
+
+    Where the grading worker keeps a kernel factory for this student (``Zygote``), the kernel is
+    forked from it, inside its sandbox; otherwise (or where the factory cannot be reached) this
+    starts a sandbox of its own."""
+    die_with_parent()
+    s = json.loads(Path(settings_file).read_text())
+    workdir = Path.cwd()
     conn = Path(connection_file).resolve()
-    if uid is not None:
+    if s.get("uid") is not None:
         os.chmod(conn, 0o644)          # the kernel reads its own connection file (key included)
-    cmd = bwrap_command(workdir, [Path(s["socket_dir"]), results], uid,
-                        readonly=readonly, limits=s.get("limits"), env=env)
+    if s.get("zygote_state"):
+        code = _launch_via_zygote(s, conn, workdir)
+        if code is not None:
+            return code
+    cmd = _confinement(s, workdir, [conn])
     cmd += [sys.executable, "-m", "ipykernel_launcher", "-f", str(conn),
             "--HistoryManager.hist_file=:memory:"]
     proc = subprocess.Popen(cmd)
@@ -221,12 +249,154 @@ def launch(settings_file: str, connection_file: str) -> int:
 
     signal.signal(signal.SIGTERM, stop)
     try:
-        return proc.wait(timeout=float(s.get("limits", {}).get("wall_seconds", DEFAULT_LIMITS["wall_seconds"])))
+        return proc.wait(timeout=_wall(s))
     except subprocess.TimeoutExpired:
         proc.kill()          # bwrap dies, and with its PID namespace every process inside
         proc.wait()
-        print("sandbox: the notebook ran out of its wall-clock limit and was stopped", file=sys.stderr)
+        print(WALL_MESSAGE, file=sys.stderr)
         return 137
+
+
+WALL_MESSAGE = "sandbox: the notebook ran out of its wall-clock limit and was stopped"
+ZYGOTE_WAIT_S = 120        # how long a kernel waits for its factory to listen (it imports torch first)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _launch_via_zygote(s: dict, conn: Path, workdir: Path) -> int | None:
+    """Have this student's kernel factory fork the kernel; wait for it under the wall clock.
+    Returns its exit code, or None where no factory could take the request (nothing started)."""
+    try:
+        state = json.loads(Path(s["zygote_state"]).read_text())
+    except (OSError, ValueError):
+        return None
+    if Path(state["workdir"]) != Path(os.path.realpath(workdir)) or not _alive(state["pid"]):
+        return None                    # not the folder the factory's sandbox holds
+    if s.get("uid") is not None:
+        for p in (workdir, Path(s["grading_dir"]) / "results", Path(s["socket_dir"])):
+            _chown_tree(p, s["uid"])
+    sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    deadline = time.monotonic() + ZYGOTE_WAIT_S
+    while True:
+        try:
+            sock.connect(state["socket"])
+            break
+        except OSError:
+            if time.monotonic() > deadline or not _alive(state["pid"]):
+                sock.close()
+                return None
+            time.sleep(0.05)
+    # the factory's sandbox sees a folder of connection files (jupyter keeps its own runtime folder
+    # private, 0700): a copy of this kernel's goes there, readable by the student's uid
+    visible = Path(s["connections_dir"]) / conn.name
+    shutil.copyfile(conn, visible)
+    os.chmod(visible, 0o644)
+    started = time.monotonic()
+    request = {"token": state["token"], "connection_file": str(visible), "cwd": str(workdir)}
+    with sock, sock.makefile("rb") as replies:
+        try:
+            socket.send_fds(sock, [json.dumps(request).encode()], [0, 1, 2])
+            sock.settimeout(30)
+            first = replies.readline()
+        except OSError:
+            first = b""
+        if not first.startswith(b"pid "):
+            return None                # refused before forking anything
+        sock.settimeout(max(_wall(s) - (time.monotonic() - started), 0.01))
+        try:
+            last = replies.readline()
+        except (socket.timeout, TimeoutError):
+            try:
+                os.kill(state["pid"], signal.SIGKILL)   # the factory's sandbox, and everything in it
+            except ProcessLookupError:
+                pass
+            print(WALL_MESSAGE, file=sys.stderr)
+            return 137
+        except OSError:
+            last = b""
+    if last.startswith(b"exit "):
+        code = int(last.split()[1])
+        return code if code >= 0 else 128 - code
+    print("sandbox: the kernel factory stopped while the notebook ran", file=sys.stderr)
+    return 1
+
+
+class Zygote:
+    """One student's kernel factory (``pusht.zygote``) in a sandbox like a kernel's, around the
+    folder all of that student's notebooks run in. ``launch`` forks each notebook's kernel from
+    it, which skips starting Python, ipykernel and importing torch for every notebook.
+
+    ``settings`` as for ``write_kernelspec``, with ``zygote_state`` (a file outside every sandbox
+    where the factory's pid, socket and token are written for ``launch``) and ``connections_dir``
+    (where ``launch`` puts a copy of each kernel's connection file: bound read-only)."""
+
+    def __init__(self, settings: dict, workdir: Path):
+        self.s = settings
+        self.workdir = Path(os.path.realpath(workdir))
+        self.state_file = Path(settings["zygote_state"])
+        self.proc: subprocess.Popen | None = None
+
+    def ensure(self) -> None:
+        """Start the factory, or start it again if it is gone (a notebook ran out of time)."""
+        if self.proc is not None and self.proc.poll() is None:
+            return
+        self.stop()
+        token = secrets.token_hex(16)
+        sock = Path(self.s["socket_dir"]) / "zygote"
+        conns = Path(self.s["connections_dir"])
+        conns.mkdir(mode=0o755, parents=True, exist_ok=True)
+        cmd = _confinement(self.s, self.workdir, [conns])
+        # -P: the folder it starts in (the student's) is not put on sys.path for its own imports
+        self.proc = subprocess.Popen(cmd + [sys.executable, "-P", "-m", "pusht.zygote", str(sock)],
+                                     stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
+        self.proc.stdin.write(token + "\n")
+        self.proc.stdin.close()
+        tmp = self.state_file.with_suffix(".tmp")
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+        with os.fdopen(fd, "w") as f:
+            json.dump({"pid": self.proc.pid, "socket": str(sock), "token": token,
+                       "workdir": str(self.workdir)}, f)
+        os.replace(tmp, self.state_file)
+        # until bwrap has set its sandbox up, killing it may not take the inside along: wait for the
+        # factory to listen (its socket appears once it has imported everything)
+        deadline = time.monotonic() + ZYGOTE_WAIT_S
+        while not sock.exists() and self.proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+
+    def stop(self) -> None:
+        """Kill the factory's sandbox, with every process in it."""
+        self.state_file.unlink(missing_ok=True)
+        if self.proc is not None:
+            self.proc.kill()
+            self.proc.wait()
+            self.proc = None
+        if self.s.get("uid") is not None:      # its own throw-away uid: nothing of it may outlive grading
+            kill_uid(self.s["uid"])
+
+
+def kill_uid(uid: int) -> None:
+    """SIGKILL every process running as ``uid`` (one student's throw-away uid; root only)."""
+    for _ in range(20):
+        found = False
+        for pid in filter(str.isdigit, os.listdir("/proc")):
+            try:      # /proc/PID/status, not the folder's owner: a non-dumpable process's is root
+                status = Path(f"/proc/{pid}/status").read_text()
+                if int(status.split("Uid:")[1].split()[0]) == uid:
+                    found = True
+                    os.kill(int(pid), signal.SIGKILL)
+            except (OSError, IndexError, ValueError):
+                pass
+        if not found:
+            return
+        time.sleep(0.01)
 
 
 if __name__ == "__main__":

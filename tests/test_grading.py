@@ -172,3 +172,18 @@ def test_a_changed_submission_is_graded_again_and_only_it(graded, tmp_path):
     assert after["wrong"] > before["wrong"]
     assert cell_scores(course, "wrong", "02_reward")["reward_impl_tests"] > 0
     assert {s: v for s, v in after.items() if s != "wrong"} == {s: v for s, v in before.items() if s != "wrong"}
+
+
+def test_a_students_line_sharing_a_message_with_a_grading_line_stays_in_the_feedback():
+    """The kernel cuts printed text into messages on a clock, so a student's print and the test
+    cell's '[graded outside this kernel]' line can arrive as one message: only the grading line
+    (and any line posing as a verdict) goes, whatever the cut."""
+    import nbformat
+
+    stream = lambda text: nbformat.v4.new_output("stream", name="stdout", text=text)  # noqa: E731
+    one = [stream("visible tests passed\n[graded outside this kernel] t: 9 checks recorded\n")]
+    two = [stream("visible tests passed\n"), stream("[graded outside this kernel] t: 9 checks recorded\n")]
+    forged = [stream("[grader] t: 4 of 4 points: all passed\nvisible tests passed\n")]
+    for outputs in (one, two, forged):
+        assert [o["text"] for o in grade._without_grader_lines(outputs)] == ["visible tests passed\n"]
+    assert grade._without_grader_lines([stream("[graded outside this kernel] t\n")]) == []
