@@ -204,10 +204,7 @@ def _confinement(s: dict, workdir: Path, readonly: list[Path]) -> list[str]:
     grading = Path(s["grading_dir"])
     uid = s.get("uid")
     results = grading / "results"
-    results.mkdir(parents=True, exist_ok=True)
-    if uid is not None:
-        for p in (workdir, results, Path(s["socket_dir"])):
-            _chown_tree(p, uid)
+    _hand_over(s, workdir)
     env = {k: os.environ[k] for k in PASS_ENV if k in os.environ}
     env["PUSHT_GRADING_DIR"] = str(grading)
     readonly = list(readonly) + [grading / "cases"]
@@ -216,6 +213,16 @@ def _confinement(s: dict, workdir: Path, readonly: list[Path]) -> list[str]:
         readonly.append(Path(s["shared_cache"]))
     return bwrap_command(workdir, [Path(s["socket_dir"]), results], uid,
                          readonly=readonly, limits=s.get("limits"), env=env)
+
+
+def _hand_over(s: dict, workdir: Path) -> None:
+    """Make the folders a kernel writes (its working folder, the results, the sockets) exist and
+    belong to the student's uid (root only): nbgrader, running as root, writes into them too."""
+    results = Path(s["grading_dir"]) / "results"
+    results.mkdir(parents=True, exist_ok=True)
+    if s.get("uid") is not None:
+        for p in (workdir, results, Path(s["socket_dir"])):
+            _chown_tree(p, s["uid"])
 
 
 def _wall(s: dict) -> float:
@@ -280,9 +287,7 @@ def _launch_via_zygote(s: dict, conn: Path, workdir: Path) -> int | None:
         return None
     if Path(state["workdir"]) != Path(os.path.realpath(workdir)) or not _alive(state["pid"]):
         return None                    # not the folder the factory's sandbox holds
-    if s.get("uid") is not None:
-        for p in (workdir, Path(s["grading_dir"]) / "results", Path(s["socket_dir"])):
-            _chown_tree(p, s["uid"])
+    _hand_over(s, workdir)
     sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     deadline = time.monotonic() + ZYGOTE_WAIT_S
     while True:
