@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import json
 import os
+import secrets
 import selectors
 import signal
 import socket
@@ -49,14 +50,16 @@ def preload() -> None:
     """Import what a notebook's kernel will: ipykernel, torch, numpy, matplotlib, this package."""
     os.environ.setdefault("MPLBACKEND", "module://matplotlib_inline.backend_inline")   # as ipykernel sets
     import importlib
+    import pkgutil
 
-    for name in ("ipykernel.kernelapp", "ipykernel.ipkernel", "IPython.display", "numpy", "torch",
-                 "torch.nn.functional", "matplotlib.pyplot", "tqdm.auto", "pymunk", "pusht.agent",
-                 "pusht.analysis", "pusht.config", "pusht.data", "pusht.draw", "pusht.dreamer",
-                 "pusht.ensemble", "pusht.env", "pusht.evaluate", "pusht.expert", "pusht.imagination",
-                 "pusht.nb", "pusht.nb.actor", "pusht.nb.closing", "pusht.nb.gap", "pusht.nb.horizon",
-                 "pusht.nb.reward", "pusht.nb.world_model", "pusht.page", "pusht.predict", "pusht.reward", "pusht.selfcheck",
-                 "pusht.world_model"):
+    import pusht
+
+    # every module of this package, found rather than listed, so that one added later is preloaded
+    # too (walk_packages imports the subpackages it descends into; one that fails is skipped here)
+    ours = [m.name for m in pkgutil.walk_packages(pusht.__path__, "pusht.", onerror=lambda name: None)
+            if m.name != "pusht.zygote"]
+    for name in ["ipykernel.kernelapp", "ipykernel.ipkernel", "IPython.display", "numpy", "torch",
+                 "torch.nn.functional", "matplotlib.pyplot", "tqdm.auto", "pymunk", *ours]:
         try:
             importlib.import_module(name)
         except Exception:        # noqa: BLE001  a module that fails here fails again, visibly, in the kernel
@@ -172,7 +175,9 @@ def serve(path: str, token: str) -> None:
                 try:
                     msg, fds, _, _ = socket.recv_fds(conn, MAX_REQUEST, 3)
                     request = json.loads(msg.decode())
-                    ok = request.get("token") == token and len(fds) == 3
+                    given = request.get("token") if isinstance(request, dict) else None
+                    ok = (isinstance(given, str) and secrets.compare_digest(given.encode(), token.encode())
+                          and len(fds) == 3)
                 except (OSError, ValueError, UnicodeDecodeError):
                     ok, fds = False, []
                 if not ok:

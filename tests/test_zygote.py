@@ -134,18 +134,25 @@ def test_a_kernel_starts_its_own_sandbox_when_the_factory_is_gone(factory):
 
 
 def test_a_request_without_the_token_starts_nothing(factory):
-    _, root = factory
+    zygote, root = factory
     state = json.loads((root / "zygote.json").read_text())
     deadline = time.monotonic() + 120
-    s = socket.socket(socket.AF_UNIX)
     while True:
-        try:
+        with socket.socket(socket.AF_UNIX) as s:
+            try:
+                s.connect(state["socket"])
+                break
+            except OSError:
+                assert time.monotonic() < deadline, "the factory never listened"
+                time.sleep(0.1)
+    # a wrong token, then requests a hostile kernel could send that are not even well formed
+    for request in (json.dumps({"token": "wrong", "cwd": "/", "connection_file": "x"}).encode(),
+                    json.dumps([state["token"]]).encode(), json.dumps({"token": 12345}).encode(),
+                    b"\xff not json"):
+        with socket.socket(socket.AF_UNIX) as s:
             s.connect(state["socket"])
-            break
-        except OSError:
-            assert time.monotonic() < deadline, "the factory never listened"
-            time.sleep(0.1)
-    with s:
-        socket.send_fds(s, [json.dumps({"token": "wrong", "cwd": "/", "connection_file": "x"}).encode()],
-                        [0, 1, 2])
-        assert s.recv(64) == b""
+            socket.send_fds(s, [request], [0, 1, 2])
+            assert s.recv(64) == b""                        # refused: the connection is just closed
+    time.sleep(0.5)
+    assert zygote.proc.poll() is None                       # and the factory still serves its grader
+    assert run_kernel(root, "print(6 * 7)").strip() == "42"
