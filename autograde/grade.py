@@ -34,6 +34,7 @@ re-applied after every run.
 from __future__ import annotations
 
 import argparse
+import base64
 import csv
 import hashlib
 import io
@@ -42,6 +43,7 @@ import os
 import re
 import shutil
 import signal
+import stat
 import subprocess
 import sys
 import tempfile
@@ -195,7 +197,9 @@ def private_course(bundle: bytes, student: str, notebooks: dict, work: Path) -> 
 def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | None, limits: dict,
            shared: str | None = None) -> dict:
     """Autograde every notebook of one student in the private course ``priv`` (runs in its own
-    process). Returns {notebook: {"ok", "error", "scores": {grade_id: auto score}, "verdicts"}}.
+    process). Returns {notebook: {"ok", "error", "scores": {grade_id: auto score}, "results":
+    {test id: the raw results its kernel saved, base64, or None}, "verdicts": {}}}; grade_task
+    judges the results (``judge_results``), so that this process never needs torch.
     ``shared``: a folder of stages computed once for the whole batch, which the kernels read."""
     from traitlets.config import PyFileConfigLoader
 
@@ -277,13 +281,40 @@ def _grade_notebooks(priv: Path, student: str, config, grading: Path, zygote) ->
             with Gradebook(config.CourseDirectory.db_url, course_id=COURSE_ID) as gb:
                 sub = gb.find_submission_notebook(nb_id, ASSIGNMENT, student)
                 entry["scores"] = {g.name: g.auto_score for g in sub.grades}
-        # judged here, in the worker, which the kernel cannot reach (the results files are its)
-        for test in checks.TESTS.values():
-            if name.startswith(test.notebook):
-                results = grading / "results" / f"{test.test_id}.npz"
-                entry["verdicts"][test.test_id] = vars(checks.judge(test, results))
+        # the raw results the kernel saved, taken out of its reach before the next notebook; they are
+        # judged by grade_task, whose process has torch and the reference code loaded already
+        entry["results"] = {test.test_id: _read_results(grading / "results" / f"{test.test_id}.npz")
+                            for test in checks.TESTS.values() if name.startswith(test.notebook)}
         out[name] = entry
     return out
+
+
+MAX_RESULTS = 4 << 20     # bytes: far more than any test's probes save
+
+
+def _read_results(path: Path) -> str | None:
+    """A results file a kernel wrote, base64, read without following a link (the kernel made it);
+    None if there is none, "" (judged unreadable) if it is not a plain file of a sane size."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    except FileNotFoundError:
+        return None
+    except OSError:
+        return ""
+    with os.fdopen(fd, "rb") as f:
+        if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):
+            return ""
+        data = f.read(MAX_RESULTS + 1)
+    return base64.b64encode(data).decode() if len(data) <= MAX_RESULTS else ""
+
+
+def judge_results(results: dict) -> None:
+    """Turn each notebook's raw results (from the worker) into verdicts, in place."""
+    for entry in results.values():
+        raw = entry.pop("results", None) or {}
+        for test_id, data in raw.items():
+            blob = None if data is None else base64.b64decode(data)
+            entry.setdefault("verdicts", {})[test_id] = vars(checks.judge(checks.TESTS[test_id], blob))
 
 
 def _last_error(text: str) -> str:
@@ -320,7 +351,7 @@ def grade_task(bundle: bytes, student: str, notebooks: dict, timeout: int, confi
             shared = str(folder)
         args = {"priv": str(priv), "student": student, "timeout": timeout, "confine": confine,
                 "uid": sandbox.student_uid(index) if confine else None, "limits": limits,
-                "shared": str(shared) if shared else None}
+                "shared": str(shared) if shared else None, "answer": str(work / "answer.json")}
         proc = subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "--worker", json.dumps(args)],
                                 cwd=priv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                 env=tool_env(), start_new_session=True)
@@ -335,8 +366,11 @@ def grade_task(bundle: bytes, student: str, notebooks: dict, timeout: int, confi
             except ProcessLookupError:
                 pass
             proc.wait()
-        line = next((l for l in reversed(stdout.splitlines()) if l.startswith("{")), None)
-        result = json.loads(line) if line else {}
+        # the worker's answer comes in a file no sandbox can reach: a kernel shares the worker's
+        # stdout and could print something that looks like one
+        answer = work / "answer.json"
+        result = json.loads(answer.read_text()) if proc.returncode == 0 and answer.is_file() else {}
+        judge_results(result)
         if not result:
             result = {name: {"ok": False, "error": _last_error(stderr), "scores": {}, "verdicts": {}}
                       for name in notebooks}
@@ -612,11 +646,51 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
         gb.db.commit()
     record(course, report, results)
     sanitize_feedback_sources(course, report)
-    res = nbgrader_api(course).generate_feedback(ASSIGNMENT, force=True)
-    if not res.get("success"):
-        log(f"nbgrader generate_feedback failed: {_last_error(res.get('error') or res.get('log') or '')}")
+    generate_feedback(course, [s for s in report if results.get(s)], jobs, log)
     export(course, report, got.rejected)
     return report
+
+
+def generate_feedback(course: Path, students: list[str], jobs: int, log=print) -> None:
+    """nbgrader's feedback pages for ``students``, ``jobs`` processes at once.
+
+    Each student's pages depend only on their autograded notebooks and their rows in the gradebook,
+    which every process only reads, so they can be made side by side (nbgrader's own
+    ``generate_feedback`` makes them one student after another; benchmarks/grading_wallclock.txt
+    has what that cost). The pages are the same whichever process makes them."""
+    students = sorted(students)
+    n = max(1, min(jobs, len(students)))
+    if n == 1:
+        errors = _feedback_for(course, students)
+    else:
+        errors = {}
+        with tempfile.TemporaryDirectory(prefix="pusht-feedback-") as tmp:
+            procs = []
+            for i in range(n):
+                chunk, answer = students[i::n], Path(tmp) / f"{i}.json"
+                args = json.dumps({"course": str(course), "students": chunk, "answer": str(answer)})
+                procs.append((chunk, answer, subprocess.Popen(
+                    [sys.executable, str(Path(__file__).resolve()), "--feedback", args], cwd=course,
+                    stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=tool_env())))
+            for chunk, answer, proc in procs:
+                _, stderr = proc.communicate()
+                if proc.returncode == 0 and answer.is_file():
+                    errors.update(json.loads(answer.read_text()))
+                else:
+                    errors.update({s: _last_error(stderr) for s in chunk})
+    for student, error in sorted(errors.items()):
+        log(f"nbgrader generate_feedback failed for {student}: {error}")
+
+
+def _feedback_for(course: Path, students: list[str]) -> dict:
+    """Feedback for each of ``students`` in this process; returns {student: error} for failures."""
+    api = nbgrader_api(course)
+    errors = {}
+    for student in students:
+        res = api.generate_feedback(ASSIGNMENT, student_id=student, force=True)
+        if not res.get("success"):
+            errors[student] = _last_error(res.get("error") or res.get("log") or "")
+    return errors
 
 
 def record(course: Path, report: dict, results: dict) -> None:
@@ -808,7 +882,11 @@ def main(argv=None) -> int:
     if argv[:1] == ["--worker"]:
         a = json.loads(argv[1])
         out = worker(Path(a["priv"]), a["student"], a["timeout"], a["confine"], a["uid"], a["limits"], a.get("shared"))
-        print(json.dumps(out))
+        Path(a["answer"]).write_text(json.dumps(out))
+        return 0
+    if argv[:1] == ["--feedback"]:
+        a = json.loads(argv[1])
+        Path(a["answer"]).write_text(json.dumps(_feedback_for(Path(a["course"]), a["students"])))
         return 0
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("submissions", type=Path, help="a .zip from the LMS, or a folder of notebooks")

@@ -65,7 +65,8 @@ def main(argv=None) -> int:
             return out
         return wrapper
 
-    for name in ("prepare_course", "grade_task", "record", "sanitize_feedback_sources", "export"):
+    for name in ("prepare_course", "grade_task", "record", "sanitize_feedback_sources", "generate_feedback",
+                 "export"):
         setattr(grade, name, timed(name, getattr(grade, name)))
     api = grade.nbgrader_api
     grade.nbgrader_api = lambda course: _timed_api(api(course), phases)
