@@ -213,6 +213,12 @@ def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | Non
     os.environ["JUPYTER_RUNTIME_DIR"] = str(runtime)
     os.environ["NBGRADER_EXECUTION"] = "autograde"
     os.environ["TQDM_DISABLE"] = "1"      # no progress bars (and no rates or times) in graded outputs
+    # Grading runs one task per core, so a kernel's torch must not start a thread per core of its own:
+    # two kernels doing so on two cores made notebooks several times slower (OpenMP threads waiting
+    # on each other; benchmarks/grading_wallclock.txt). One thread is also the chapter's own setting
+    # (Config.threads). An instructor's explicit setting is kept.
+    for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
     config = PyFileConfigLoader("nbgrader_config.py", path=str(priv)).load_config()
     config.CourseDirectory.root = str(priv)
     config.CourseDirectory.db_url = f"sqlite:///{priv / 'gradebook.db'}"

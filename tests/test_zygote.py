@@ -25,14 +25,13 @@ import sandbox  # noqa: E402
 pytestmark = pytest.mark.skipif(not sandbox.available()[0], reason="no bubblewrap sandbox here")
 
 
-@pytest.fixture()
-def factory(tmp_path, monkeypatch):
+def start_factory(tmp_path, monkeypatch, index=7):
     root = tmp_path / "run"
     for d in ("sockets", "runtime", "grading/cases", "work"):
         (root / d).mkdir(parents=True)
     os.chmod(tmp_path, 0o755)
     settings = {"socket_dir": str(root / "sockets"), "grading_dir": str(root / "grading"),
-                "uid": sandbox.student_uid(7), "limits": {**sandbox.DEFAULT_LIMITS, "wall_seconds": 40},
+                "uid": sandbox.student_uid(index), "limits": {**sandbox.DEFAULT_LIMITS, "wall_seconds": 40},
                 "shared_cache": None, "zygote_state": str(root / "zygote.json"),
                 "connections_dir": str(root / "connections")}
     monkeypatch.setenv("JUPYTER_RUNTIME_DIR", str(root / "runtime"))
@@ -40,6 +39,12 @@ def factory(tmp_path, monkeypatch):
     monkeypatch.setenv("JUPYTER_PATH", str(root / "jupyter"))
     zygote = sandbox.Zygote(settings, root / "work")
     zygote.ensure()
+    return zygote, root
+
+
+@pytest.fixture()
+def factory(tmp_path, monkeypatch):
+    zygote, root = start_factory(tmp_path, monkeypatch)
     yield zygote, root
     zygote.stop()
 
@@ -83,6 +88,20 @@ def test_kernels_are_forked_fresh_and_leave_nothing_behind(factory):
     assert draw1 != draw2                     # each kernel has its own random state, not the factory's
     assert preloaded == "True"                # the point of the factory: torch is already imported
     assert zygote.proc.poll() is None         # one factory served both
+
+
+def test_a_kernel_keeps_the_graders_thread_setting(tmp_path, monkeypatch):
+    # grade.worker sets OMP_NUM_THREADS=1 (one grading task per core); torch is imported in the
+    # factory before any kernel exists, so the setting must already be there when the factory starts
+    monkeypatch.setenv("OMP_NUM_THREADS", "1")
+    monkeypatch.setenv("MKL_NUM_THREADS", "1")
+    zygote, root = start_factory(tmp_path, monkeypatch, index=8)
+    try:
+        out = run_kernel(root, "import torch\nprint(torch.get_num_threads())")
+        assert out.strip() == "1"
+        assert zygote.proc.poll() is None            # it came from the factory
+    finally:
+        zygote.stop()
 
 
 def test_the_factory_cannot_be_read_or_commanded_from_a_kernel(factory):
