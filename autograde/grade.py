@@ -47,6 +47,7 @@ import stat
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 import warnings
 import zipfile
@@ -314,13 +315,25 @@ def _read_results(path: Path) -> str | None:
     return base64.b64encode(data).decode() if len(data) <= MAX_RESULTS else ""
 
 
+_JUDGING = threading.Lock()
+
+
 def judge_results(results: dict) -> None:
-    """Turn each notebook's raw results (from the worker) into verdicts, in place."""
+    """Turn each notebook's raw results (from the worker) into verdicts, in place.
+
+    One judgement at a time in a process: several tasks finish in threads of the same process,
+    and the reference probes seed torch's global random generator to build their models (two at
+    once drew each other's numbers, and a correct student lost the points). The caller's own
+    random state is put back afterwards."""
+    import torch
+
     for entry in results.values():
         raw = entry.pop("results", None) or {}
         for test_id, data in raw.items():
             blob = None if data is None else base64.b64decode(data)
-            entry.setdefault("verdicts", {})[test_id] = vars(checks.judge(checks.TESTS[test_id], blob))
+            with _JUDGING, torch.random.fork_rng(devices=[]):
+                verdict = checks.judge(checks.TESTS[test_id], blob)
+            entry.setdefault("verdicts", {})[test_id] = vars(verdict)
 
 
 def _last_error(text: str) -> str:

@@ -112,3 +112,29 @@ def test_the_static_check_finds_delegation_but_not_honest_code():
         assert checks.delegations(checks.REWARD, cells(src), set()), src
     honest = "def reward_from_obs(norm_obs, mean, std):\n    return norm_obs.sum(-1)\nprint('results/ in .npz')\n"
     assert checks.delegations(checks.REWARD, cells(honest), set()) == []
+
+
+
+def test_verdicts_judged_in_several_threads_at_once_are_the_verdicts_judged_alone(grading_dir):
+    # grade_task judges in its own process, and several tasks finish in threads of one process; the
+    # reference probes seed torch's global generator, so judgements must not interleave
+    import base64
+    from concurrent.futures import ThreadPoolExecutor
+
+    import grade
+
+    grading.submit(checks.DREAM.test_id, dream)
+    raw = base64.b64encode((grading_dir / "results" / f"{checks.DREAM.test_id}.npz").read_bytes()).decode()
+
+    def judged(_):
+        results = {"04.ipynb": {"results": {checks.DREAM.test_id: raw}}}
+        grade.judge_results(results)
+        return results["04.ipynb"]["verdicts"][checks.DREAM.test_id]["message"]
+
+    torch.manual_seed(123)
+    expected = torch.rand(3)
+    torch.manual_seed(123)
+    with ThreadPoolExecutor(4) as pool:
+        messages = list(pool.map(judged, range(24)))
+    assert set(messages) == {f"all {len(checks.DREAM.cases)} checks passed"}, set(messages)
+    assert torch.equal(torch.rand(3), expected)        # the caller's random numbers are its own
