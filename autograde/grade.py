@@ -686,17 +686,18 @@ def generate_feedback(course: Path, students: list[str], jobs: int, log=print) -
         with tempfile.TemporaryDirectory(prefix="pusht-feedback-") as tmp:
             procs = []
             for i in range(n):
-                chunk, answer = students[i::n], Path(tmp) / f"{i}.json"
+                chunk, answer, err = students[i::n], Path(tmp) / f"{i}.json", Path(tmp) / f"{i}.err"
                 args = json.dumps({"course": str(course), "students": chunk, "answer": str(answer)})
-                procs.append((chunk, answer, subprocess.Popen(
-                    [sys.executable, str(Path(__file__).resolve()), "--feedback", args], cwd=course,
-                    stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=tool_env())))
-            for chunk, answer, proc in procs:
-                _, stderr = proc.communicate()
+                with open(err, "w") as stderr:       # a file, not a pipe: no process waits on a full one
+                    procs.append((chunk, answer, err, subprocess.Popen(
+                        [sys.executable, str(Path(__file__).resolve()), "--feedback", args], cwd=course,
+                        stdout=subprocess.DEVNULL, stderr=stderr, env=tool_env())))
+            for chunk, answer, err, proc in procs:
+                proc.wait()
                 if proc.returncode == 0 and answer.is_file():
                     errors.update(json.loads(answer.read_text()))
                 else:
-                    errors.update({s: _last_error(stderr) for s in chunk})
+                    errors.update({s: _last_error(err.read_text(errors="replace")) for s in chunk})
     for student, error in sorted(errors.items()):
         log(f"nbgrader generate_feedback failed for {student}: {error}")
 

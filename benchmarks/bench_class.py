@@ -33,6 +33,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import grade  # noqa: E402
 import sandbox  # noqa: E402
+from bench import host_description  # noqa: E402
 from bench_grading import executed_notebooks  # noqa: E402
 from synthetic_class import build  # noqa: E402
 
@@ -83,7 +84,7 @@ def main(argv=None) -> int:
     subs = tmp / "class.zip"
     ids = class_zip(executed_notebooks(args.executed, tmp), args.students, subs)
     jobs = args.jobs or os.cpu_count()
-    print(f"host: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, python "
+    print(f"host: {host_description()}, python "
           f"{platform.python_version()}; confined: {sandbox.available()[0]}; {len(ids)} students "
           f"({', '.join(KINDS)}, cycled); jobs {jobs}", flush=True)
     course = tmp / "class"

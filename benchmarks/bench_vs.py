@@ -1,6 +1,6 @@
 """This checkout's pipeline against an older commit's, cold, interleaved, on this machine.
 
-    python benchmarks/bench_vs.py [--old af06280] [--repeats 3] [--seed 0]
+    python benchmarks/bench_vs.py [--old af06280] [--repeats 3] [--seed 0] [--notebooks]
 
 Checks the old commit out into a temporary git worktree and runs, alternately, its
 ``python -m pusht.dreamer --seed 0 --no-cache`` and this checkout's (default config, a fresh
@@ -8,11 +8,19 @@ process each: torch import and expert-data collection included), ``--repeats`` t
 same interpreter and packages; the old code is imported from its worktree (the current folder
 comes first on ``sys.path``). Prints each run, the medians and their ratio. Interleaving puts
 both under the same background load, so the ratio is fairer than two separate runs' figures.
+
+``--notebooks`` times notebooks 01-05 instead: each run executes the tree's own solution notebooks
+01 to 05 in order at the default config (papermill, as ``make chapter`` does, with that tree's
+``scripts/chapter.py``) into a fresh folder, so every stage is computed (cold) and later notebooks
+reuse what earlier ones cached, as in a learner's session; the kernels import the tree's package
+(PYTHONPATH). Prints each notebook's seconds and the medians of the totals.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import platform
 import statistics
 import subprocess
@@ -22,6 +30,9 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from bench import host_description  # noqa: E402
 
 
 def one_run(tree: Path, seed: int, out: Path) -> float:
@@ -31,11 +42,36 @@ def one_run(tree: Path, seed: int, out: Path) -> float:
     return time.perf_counter() - t
 
 
+NOTEBOOK_RUN = """
+import json, sys, time
+from pathlib import Path
+tree, out = Path(sys.argv[1]), Path(sys.argv[2])
+sys.path.insert(0, str(tree / "scripts"))
+from chapter import execute
+seconds = {}
+for nb in sorted((tree / "solutions").glob("0[1-5]_*.ipynb")):
+    t = time.perf_counter()
+    execute(nb, out, smoke=False)
+    seconds[nb.name] = time.perf_counter() - t
+print(json.dumps(seconds))
+"""
+
+
+def notebooks_run(tree: Path, out: Path) -> dict:
+    """Notebooks 01-05 of ``tree`` at the default config, in order, into ``out``: {name: seconds}."""
+    out.mkdir(parents=True)
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    proc = subprocess.run([sys.executable, "-c", NOTEBOOK_RUN, str(tree), str(out)], cwd=out, env=env,
+                          check=True, capture_output=True, text=True)
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--old", default="af06280")
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--notebooks", action="store_true", help="time notebooks 01-05 instead of the pipeline")
     args = p.parse_args(argv)
     tmp = Path(tempfile.mkdtemp(prefix="bench-vs-"))
     old = tmp / "old"
@@ -45,17 +81,29 @@ def main(argv=None) -> int:
         which = subprocess.run([sys.executable, "-c", "import pusht; print(pusht.__file__)"], cwd=old,
                                check=True, capture_output=True, text=True).stdout.strip()
         assert Path(which).resolve().is_relative_to(old.resolve()), f"old code not imported from its worktree: {which}"
+        if args.notebooks:             # a kernel starts in its output folder: PYTHONPATH must do it
+            which = subprocess.run([sys.executable, "-c", "import pusht; print(pusht.__file__)"], cwd=tmp,
+                                   env={**os.environ, "PYTHONPATH": str(old)}, check=True, capture_output=True,
+                                   text=True).stdout.strip()
+            assert Path(which).resolve().is_relative_to(old.resolve()), f"PYTHONPATH does not reach the old code: {which}"
         head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
                               text=True).stdout.strip()
-        print(f"host: {platform.processor() or platform.machine()}, python {platform.python_version()}; "
-              f"{args.old} vs this checkout ({head}, with any uncommitted changes), seed {args.seed}, "
+        what = "notebooks 01-05" if args.notebooks else f"the pipeline, seed {args.seed}"
+        print(f"host: {host_description()}, python {platform.python_version()}; "
+              f"{args.old} vs this checkout ({head}, with any uncommitted changes): {what}, "
               f"default config, cold", flush=True)
         times = {"old": [], "new": []}
         for r in range(args.repeats):
             for name, tree in (("old", old), ("new", ROOT)):
-                s = one_run(tree, args.seed, tmp / f"{name}{r}")
+                if args.notebooks:
+                    each = notebooks_run(tree, tmp / f"{name}{r}")
+                    s = sum(each.values())
+                    detail = ", ".join(f"{n[:2]} {v:.1f}" for n, v in each.items())
+                    print(f"  run {r + 1} {name}: {s:.1f} s ({detail})", flush=True)
+                else:
+                    s = one_run(tree, args.seed, tmp / f"{name}{r}")
+                    print(f"  run {r + 1} {name}: {s:.1f} s", flush=True)
                 times[name].append(s)
-                print(f"  run {r + 1} {name}: {s:.1f} s", flush=True)
         mo, mn = statistics.median(times["old"]), statistics.median(times["new"])
         print(f"median {args.old}: {mo:.1f} s; median now: {mn:.1f} s; now / old = {mn / mo:.2f}")
     finally:
