@@ -21,11 +21,13 @@ Student code is untrusted. What happens, per student:
    per core); with fewer students than jobs, each student's notebooks are split over several
    tasks, so even one student keeps every core busy. A failure in one notebook costs only that
    notebook;
-4. the test cells' verdicts are made here, outside the kernel, from the raw numbers the kernel
-   recorded (``checks.judge``), so nothing the student's code does in the kernel can forge them;
+4. the test cells' verdicts are made outside the kernel, by the grading task's own process, from
+   the raw numbers the kernel recorded (``checks.judge``), so nothing the student's code does in
+   the kernel can forge them;
 5. only this process writes the course's gradebook: every student's scores, completion points
-   and manual grades (``manual_grades.csv``), then the feedback pages (hidden tests removed,
-   outputs capped), ``grades.csv`` (nbgrader's export of that gradebook) and ``report.csv``.
+   and manual grades (``manual_grades.csv``); then the feedback pages (hidden tests removed,
+   outputs capped; ``--jobs`` processes at once, each only reading the gradebook), ``grades.csv``
+   (nbgrader's export of that gradebook) and ``report.csv``.
 
 Grading again gives the same grades: manual grades live in ``manual_grades.csv`` and are
 re-applied after every run.
