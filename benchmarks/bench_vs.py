@@ -57,6 +57,13 @@ print(json.dumps(seconds))
 """
 
 
+def imports_old(old: Path, cwd: Path, env=None) -> None:
+    """Fail unless a Python started in ``cwd`` with ``env`` imports the package from ``old``."""
+    which = subprocess.run([sys.executable, "-c", "import pusht; print(pusht.__file__)"], cwd=cwd, env=env,
+                           check=True, capture_output=True, text=True).stdout.strip()
+    assert Path(which).resolve().is_relative_to(old.resolve()), f"the old code is not the one imported: {which}"
+
+
 def notebooks_run(tree: Path, out: Path) -> dict:
     """Notebooks 01-05 of ``tree`` at the default config, in order, into ``out``: {name: seconds}."""
     out.mkdir(parents=True)
@@ -78,14 +85,9 @@ def main(argv=None) -> int:
     subprocess.run(["git", "worktree", "add", "--detach", str(old), args.old], cwd=ROOT, check=True,
                    capture_output=True)
     try:
-        which = subprocess.run([sys.executable, "-c", "import pusht; print(pusht.__file__)"], cwd=old,
-                               check=True, capture_output=True, text=True).stdout.strip()
-        assert Path(which).resolve().is_relative_to(old.resolve()), f"old code not imported from its worktree: {which}"
+        imports_old(old, cwd=old)
         if args.notebooks:             # a kernel starts in its output folder: PYTHONPATH must do it
-            which = subprocess.run([sys.executable, "-c", "import pusht; print(pusht.__file__)"], cwd=tmp,
-                                   env={**os.environ, "PYTHONPATH": str(old)}, check=True, capture_output=True,
-                                   text=True).stdout.strip()
-            assert Path(which).resolve().is_relative_to(old.resolve()), f"PYTHONPATH does not reach the old code: {which}"
+            imports_old(old, cwd=tmp, env={**os.environ, "PYTHONPATH": str(old)})
         head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
                               text=True).stdout.strip()
         what = "notebooks 01-05" if args.notebooks else f"the pipeline, seed {args.seed}"
