@@ -127,6 +127,28 @@ def test_a_colab_download_grades_like_any_other(graded):
     assert any("Colab" in n for n in report["colab"]["notes"])
 
 
+def test_feedback_pages_are_the_documents_nbgraders_own_exporter_makes(graded, tmp_path):
+    """The pages come from autograde/feedback_html.py's exporter, which skips nbconvert's
+    BeautifulSoup round trip; nbgrader's default exporter, on a copy of the course, makes the same
+    documents."""
+    import shutil
+
+    from bs4 import BeautifulSoup
+    from nbconvert.exporters import HTMLExporter
+
+    course, _, _ = graded
+    copy = tmp_path / "course"
+    shutil.copytree(course, copy, ignore=shutil.ignore_patterns("feedback"))
+    api = grade.nbgrader_api(copy)
+    api.config.GenerateFeedback.exporter_class = HTMLExporter
+    assert api.generate_feedback(grade.ASSIGNMENT, student_id="wrong", force=True)["success"]
+    pages = sorted((course / "feedback" / "wrong" / grade.ASSIGNMENT).glob("*.html"))
+    assert len(pages) == 6
+    for page in pages:
+        theirs = (copy / "feedback" / "wrong" / grade.ASSIGNMENT / page.name).read_text()
+        assert BeautifulSoup(page.read_text(), "html.parser") == BeautifulSoup(theirs, "html.parser"), page.name
+
+
 def test_mark_scheme_reaches_students_through_feedback_only(graded):
     course, _, _ = graded
     feedback = (course / "feedback" / "perfect" / grade.ASSIGNMENT / "04_imagination_gap.html").read_text()

@@ -166,6 +166,41 @@ def test_every_figure_returns_a_labelled_figure():
     assert_labelled(nb02.reward_error_figure(nb02.reward_errors(views), np.arange(3, 11) * 0.1))
 
 
+def test_while_nbgrader_runs_a_notebook_no_figure_is_drawn_and_nothing_it_is_given_runs(monkeypatch):
+    """Figures grade nothing: under nbgrader (NBGRADER_EXECUTION set) a figure function returns None
+    without calling the learner's function it was given, and opens no figure; outside it, it runs."""
+    def learners(norm_obs, mean, std):
+        raise RuntimeError("the learner's reward ran")
+
+    monkeypatch.setenv("NBGRADER_EXECUTION", "autograde")
+    open_before = plt.get_fignums()
+    assert nb02.reward_heatmap_figure(learners, MEAN, STD, PUSHER, n=11) is None
+    assert plt.get_fignums() == open_before
+    monkeypatch.delenv("NBGRADER_EXECUTION")
+    with pytest.raises(RuntimeError, match="learner's reward ran"):
+        nb02.reward_heatmap_figure(learners, MEAN, STD, PUSHER, n=11)
+
+
+def test_every_figure_function_of_every_notebook_is_skipped_while_grading():
+    """The convention that makes the test above hold for a figure added later: every function of
+    pusht.nb whose name says it draws a figure carries ``pusht.nb.figure``."""
+    import importlib
+    import inspect
+    import pkgutil
+
+    import pusht.nb
+
+    skipped = pusht.nb.figure(lambda: None).__code__        # the code of figure's wrapper
+    found = []
+    for mod in pkgutil.iter_modules(pusht.nb.__path__, "pusht.nb."):
+        module = importlib.import_module(mod.name)
+        for name, fn in inspect.getmembers(module, inspect.isfunction):
+            if fn.__module__ == module.__name__ and (name.startswith("fig_") or name.endswith("_figure")):
+                found.append(name)
+                assert fn.__code__ is skipped, f"{mod.name}.{name} lacks @figure"
+    assert len(found) >= 20, found
+
+
 # --- self-checks --------------------------------------------------------------------------------
 def test_self_checks_are_valid_questions_and_an_empty_answer_never_fails():
     assert 3 <= len(nb02.SELF_CHECKS) <= 4

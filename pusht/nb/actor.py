@@ -6,6 +6,7 @@ import numpy as np
 import torch
 
 from ..selfcheck import Question
+from . import figure
 
 # --- what each loss reaches --------------------------------------------------------------------
 
@@ -141,6 +142,7 @@ def _smooth(x: np.ndarray, w: int) -> np.ndarray:
     return np.convolve(x, np.ones(w) / w, mode="valid")
 
 
+@figure
 def fig_lambda_returns(returns_by_lam: dict, train_lam: float, n_dreams: int):
     """Mean lambda-return per dreamed step for several lambdas (dict lam -> (H,) array)."""
     import matplotlib.pyplot as plt
@@ -157,6 +159,7 @@ def fig_lambda_returns(returns_by_lam: dict, train_lam: float, n_dreams: int):
     return fig
 
 
+@figure
 def fig_training(hists: dict, monitor_episodes: int):
     """Imagined reward per update (moving average) and the real monitor, for each named run.
 
@@ -183,6 +186,7 @@ def fig_training(hists: dict, monitor_episodes: int):
     return fig
 
 
+@figure
 def fig_critic_and_std(hist: dict):
     """The critic's loss and the actor's exploration noise over training."""
     import matplotlib.pyplot as plt

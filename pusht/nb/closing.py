@@ -53,6 +53,7 @@ from ..env import ARENA_HALF, CONTROL_DT, OBS_NAMES, SUCCESS_POS
 from ..selfcheck import Question
 from .gap import NEAR
 from .horizon import LEVEL, Test, t_quantile
+from . import figure
 
 # 1 mm: the resolution at which the model's errors are read as changed. Physically: a thirtieth of
 # the pusher's radius (3 cm), a twentieth of the success radius (2 cm); it is also the package's
@@ -719,6 +720,7 @@ def _round_axis(ax, rounds):
     ax.set_xlim(min(r) - 0.4, max(r) + 0.4)
 
 
+@figure
 def fig_rounds(rounds: list):
     """Left: the gap per round over the training horizon and over the whole evaluation, ± one
     standard error over the starts. Right: the dream's and reality's rating per round (whole
@@ -757,6 +759,7 @@ def fig_rounds(rounds: list):
     return fig
 
 
+@figure
 def fig_model_error(rounds: list):
     """The world model's one-step (top) and open-loop (bottom) RMSE per round, pusher (left) and
     block (right), on the policy's data and on held-out expert data; copy-last dashed."""
@@ -786,6 +789,7 @@ def fig_model_error(rounds: list):
     return fig
 
 
+@figure
 def fig_block(rounds: list):
     """What the real policy does to the block, per round: episodes touching it, how far it moved
     (mean, with the bound on its standard error, and the largest), and how much closer to the target
@@ -824,6 +828,7 @@ def fig_block(rounds: list):
     return fig
 
 
+@figure
 def fig_fixes(state_m: dict, loop_last_m: dict, delta_m: dict, ens_m: dict, labels=None):
     """The three fixes beside the single state model: the gap over the training horizon and over the
     whole evaluation (± one standard error), and both worlds' ratings, real successes under the bars.

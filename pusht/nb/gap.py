@@ -12,6 +12,7 @@ import numpy as np
 
 from ..env import SUCCESS_ANG, SUCCESS_POS, obs_to_pose
 from ..selfcheck import Question
+from . import figure
 
 K_SE = 2.0
 # 5 mm: the smallest distance difference these sentences read as a difference (a sixth of the
@@ -190,6 +191,7 @@ def solved_at_some_step(rollout) -> np.ndarray:
     return ((np.linalg.norm(tee[..., :2], axis=-1) < SUCCESS_POS) & (yaw_err < SUCCESS_ANG)).any(axis=0)
 
 
+@figure
 def fig_two_worlds(dream_roll, real_roll, gap: float, seed: int, seconds: float):
     """Reward per step, final block distance and success of one policy in both worlds."""
     import matplotlib.pyplot as plt
@@ -236,6 +238,7 @@ def fig_two_worlds(dream_roll, real_roll, gap: float, seed: int, seconds: float)
     return fig
 
 
+@figure
 def fig_decomposition(m: dict, steps: dict):
     """The controls in both worlds at both horizons, and the gap's three terms with 2-SE bars.
 
@@ -276,6 +279,7 @@ def fig_decomposition(m: dict, steps: dict):
     return fig
 
 
+@figure
 def fig_block_over_time(rollouts: dict, H: int, clip: int, data_mean_dist: float, dt: float = 0.1):
     """Mean block-to-target distance over time: three policies in the dream, the trained one in
     reality, with the training horizon and the model's training-clip length marked."""
@@ -301,6 +305,7 @@ def fig_block_over_time(rollouts: dict, H: int, clip: int, data_mean_dist: float
     return fig
 
 
+@figure
 def fig_distribution_shift(real_roll, dream_roll, at_wall_real: np.ndarray, expert_share: float,
                            replay: dict, expert_replay: dict, clip: int, dt: float = 0.1):
     """Three views of the policy leaving the data: the pusher at the walls, the model replaying the
@@ -347,6 +352,7 @@ def fig_distribution_shift(real_roll, dream_roll, at_wall_real: np.ndarray, expe
     return fig
 
 
+@figure
 def fig_pusher_paths(real_roll, touch_tol: float, seconds: float, seed: int, n: int = 6):
     """The real pusher's path for the first ``n`` starts, with the block at spawn and at the end."""
     import matplotlib.pyplot as plt

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..selfcheck import Question
+from . import figure
 
 LEVEL = 0.95                 # two-sided confidence of every test here (see the module doc)
 DT = 0.1                     # s per control step
@@ -351,6 +352,7 @@ def _points_and_mean(ax, x: float, values, color, label=None, mean_label=None, w
         ax.plot([x - width / 2, x + width / 2], [v.mean()] * 2, color="k", lw=2.5, label=mean_label)
 
 
+@figure
 def fig_gap_vs_horizon(gaps: dict, imagined: dict, real: dict, eval_horizon: int):
     """Left: the gap at each horizon, one dot per actor seed, the mean with its 95% interval.
     Right: the two ratings it is the difference of, the dream's and reality's, the same way.
@@ -388,6 +390,7 @@ def fig_gap_vs_horizon(gaps: dict, imagined: dict, real: dict, eval_horizon: int
     return fig
 
 
+@figure
 def fig_gap_terms(terms: dict, gaps: dict):
     """The gap and its three terms (``pusht.analysis``) over the whole evaluation, per horizon:
     one dot per actor seed, the mean with its 95% interval. ``terms``: ``{term: {h: [...]}}``."""
@@ -419,6 +422,7 @@ def mean_block_distance(rollout) -> np.ndarray:
     return np.linalg.norm(np.asarray(rollout.obs)[:, :, 2:4], axis=-1).mean(1)
 
 
+@figure
 def fig_block_over_time(curves: dict, dt: float = DT):
     """Mean block-to-target distance over the evaluation, per horizon, dream and reality.
 

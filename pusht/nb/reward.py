@@ -25,6 +25,7 @@ from ..draw import TARGET_COLOR, draw_state, setup_arena
 from ..env import (ARENA_HALF, CONTROL_DT, SUCCESS_ANG, SUCCESS_POS, TEE_RESET_HALF, tee_outline)
 from ..selfcheck import Question
 from .world_model import _count
+from . import figure
 
 # A signed mean counts as "not zero" only beyond this many standard errors of the mean over the
 # held-out sequences (each sequence's mean error is one sample): about a 95% two-sided band.
@@ -261,6 +262,7 @@ def recap_text(v: dict) -> str:
 
 
 # --- figures ----------------------------------------------------------------------------------
+@figure
 def reward_heatmap_figure(reward_fn, mean, std, pusher_xy, n: int = 201):
     """The reward per step over the block's centre (yaw 0) across the arena."""
     import matplotlib.pyplot as plt
@@ -291,6 +293,7 @@ def reward_heatmap_figure(reward_fn, mean, std, pusher_xy, n: int = 201):
     return fig
 
 
+@figure
 def reward_yaw_figure(reward_fn, mean, std, pusher_xy, spawn_dist: float):
     """The reward per step against the block's yaw, on the target and ``spawn_dist`` m along x."""
     import matplotlib.pyplot as plt
@@ -314,6 +317,7 @@ def reward_yaw_figure(reward_fn, mean, std, pusher_xy, spawn_dist: float):
     return fig
 
 
+@figure
 def reward_one_sequence_figure(views: dict, i: int, moved: float, context: int, dt: float = CONTROL_DT):
     """Reward, block distance and yaw error of sequence ``i``, read off the true frames, the
     filtered reconstruction and the open-loop dream (``reward_views``)."""
@@ -341,6 +345,7 @@ def reward_one_sequence_figure(views: dict, i: int, moved: float, context: int, 
     return fig
 
 
+@figure
 def final_pose_figure(true_end, dream_end, i: int, t_end: float):
     """The true and the dreamed state (metres) at the end of sequence ``i``, one arena."""
     import matplotlib.pyplot as plt
@@ -355,6 +360,7 @@ def final_pose_figure(true_end, dream_end, i: int, t_end: float):
     return fig
 
 
+@figure
 def reward_error_figure(e: dict, t_dream):
     """Signed and absolute error of the reward read off decoded frames, over dreamed time, for
     the reconstruction, the dream and copy-last (``reward_errors``)."""

@@ -23,6 +23,7 @@ import torch
 from ..draw import draw_state, setup_arena
 from ..env import CONTROL_DT, MAX_STEPS, OBS_NAMES, PushTEnv
 from ..selfcheck import Question
+from . import figure
 
 PUSHER, BLOCK_XY, BLOCK = slice(0, 2), slice(2, 4), slice(2, 6)
 
@@ -414,6 +415,7 @@ def loss_text(s: dict) -> str:
 
 
 # --- figures ----------------------------------------------------------------------------------
+@figure
 def starts_figure(seeds=(0, 1, 2)):
     """Random PushT starts ``env.reset(seed)``, one panel each."""
     import matplotlib.pyplot as plt
@@ -428,6 +430,7 @@ def starts_figure(seeds=(0, 1, 2)):
     return fig
 
 
+@figure
 def expert_figure(obs, actions, success: bool, dt: float = CONTROL_DT):
     """One expert episode: the pusher's path and the T fading in from its start pose."""
     import matplotlib.pyplot as plt
@@ -444,6 +447,7 @@ def expert_figure(obs, actions, success: bool, dt: float = CONTROL_DT):
     return fig
 
 
+@figure
 def losses_figure(history: dict, n_updates_per_epoch: int | None = None, batch_size: int | None = None):
     """The two world-model losses per update, log scale."""
     import matplotlib.pyplot as plt
@@ -465,6 +469,7 @@ def losses_figure(history: dict, n_updates_per_epoch: int | None = None, batch_s
     return fig
 
 
+@figure
 def copy_last_figure(error: dict, open_steps: int, se: dict | None = None):
     """Per-dimension held-out RMSE of the model divided by copy-last's, one step and open loop;
     with ``se`` (``copy_last_noise``), error bars of two bootstrap standard errors."""
@@ -497,6 +502,7 @@ def copy_last_figure(error: dict, open_steps: int, se: dict | None = None):
     return fig
 
 
+@figure
 def dream_vs_true_figure(true, dream, context: int, first_push_step: int, index: int,
                          dt: float = CONTROL_DT):
     """The block's four dimensions over one sequence: true (T+1, 6) and the open-loop dream of
