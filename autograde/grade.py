@@ -115,6 +115,7 @@ def nbgrader_api(course: Path):
     nbgrader serves the whole batch (an import cost 2.5 s on the recording host; see
     benchmarks/grading_wallclock.txt).
     """
+    from feedback_html import FeedbackHTMLExporter
     from nbgrader.apps import NbGraderAPI
     from nbgrader.coursedir import CourseDirectory
     from traitlets.config import PyFileConfigLoader
@@ -123,6 +124,9 @@ def nbgrader_api(course: Path):
     config = PyFileConfigLoader("nbgrader_config.py", path=str(course)).load_config()
     config.CourseDirectory.root = str(course)
     config.CourseDirectory.db_url = f"sqlite:///{course / 'gradebook.db'}"
+    # nbconvert's HTMLExporter, less the BeautifulSoup round trip that was half of each student's
+    # feedback time (feedback_html.py); the pages are the same documents
+    config.GenerateFeedback.exporter_class = FeedbackHTMLExporter
     return NbGraderAPI(coursedir=CourseDirectory(config=config), config=config)
 
 
