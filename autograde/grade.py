@@ -730,7 +730,12 @@ def record(course: Path, report: dict, results: dict) -> None:
             res = results.get(student, {})
             if not res:
                 continue
-            gb.add_submission(ASSIGNMENT, student, timestamp="2026-01-01 00:00:00.000000 UTC")
+            with warnings.catch_warnings():
+                # nbgrader's add_submission builds its rows before adding them to the session, which
+                # SQLAlchemy 2 reports once per process ("Object of type <SubmittedAssignment> not in
+                # session"); the rows are added right after, so it is noise on the instructor's screen
+                warnings.filterwarnings("ignore", message=r"Object of type <\w+> not in session")
+                gb.add_submission(ASSIGNMENT, student, timestamp="2026-01-01 00:00:00.000000 UTC")
             for name, entry in res.items():
                 nb_id = name[:-len(".ipynb")]
                 if not entry["ok"]:
