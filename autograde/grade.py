@@ -255,6 +255,8 @@ def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | Non
         if shared:
             os.environ[sandbox.SHARED_CACHE_ENV] = shared
     try:
+        if zygote is not None:
+            zygote.start()    # its imports overlap nbgrader's (_grade_notebooks); the first notebook waits
         return _grade_notebooks(priv, student, config, grading, zygote)
     finally:
         if zygote is not None:

@@ -348,9 +348,12 @@ class Zygote:
         self.workdir = Path(os.path.realpath(workdir))
         self.state_file = Path(settings["zygote_state"])
         self.proc: subprocess.Popen | None = None
+        self._sock, self._waited = None, True
 
-    def ensure(self) -> None:
-        """Start the factory, or start it again if it is gone (a notebook ran out of time)."""
+    def start(self) -> None:
+        """Start the factory, or start it again if it is gone (a notebook ran out of time), without
+        waiting for it: it imports torch, ipykernel and the package (about 2 s) while the caller
+        goes on (the worker imports nbgrader meanwhile). ``ensure`` waits for it."""
         if self.proc is not None and self.proc.poll() is None:
             return
         self.stop()
@@ -362,6 +365,7 @@ class Zygote:
         # -P: the folder it starts in (the student's) is not put on sys.path for its own imports
         self.proc = subprocess.Popen(cmd + [sys.executable, "-P", "-m", "pusht.zygote", str(sock)],
                                      stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
+        self._sock, self._waited = sock, False
         self.proc.stdin.write(token + "\n")
         self.proc.stdin.close()
         tmp = self.state_file.with_suffix(".tmp")
@@ -370,16 +374,27 @@ class Zygote:
             json.dump({"pid": self.proc.pid, "socket": str(sock), "token": token,
                        "workdir": str(self.workdir)}, f)
         os.replace(tmp, self.state_file)
+
+    def _wait_listening(self) -> None:
         # until bwrap has set its sandbox up, killing it may not take the inside along: wait for the
         # factory to listen (its socket appears once it has imported everything)
+        if self.proc is None or self._waited:
+            return
         deadline = time.monotonic() + ZYGOTE_WAIT_S
-        while not sock.exists() and self.proc.poll() is None and time.monotonic() < deadline:
+        while not self._sock.exists() and self.proc.poll() is None and time.monotonic() < deadline:
             time.sleep(0.05)
+        self._waited = True
+
+    def ensure(self) -> None:
+        """Start the factory if it is not running (``start``), and return once it listens."""
+        self.start()
+        self._wait_listening()
 
     def stop(self) -> None:
         """Kill the factory's sandbox, with every process in it."""
         self.state_file.unlink(missing_ok=True)
         if self.proc is not None:
+            self._wait_listening()       # one still starting may not die whole (see _wait_listening)
             self.proc.kill()
             self.proc.wait()
             self.proc = None

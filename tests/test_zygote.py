@@ -146,6 +146,33 @@ def test_the_wall_clock_stops_a_notebook_and_the_next_one_still_runs(factory):
     assert run_kernel(root, "print(6 * 7)").strip() == "42"
 
 
+def test_a_factory_stopped_while_it_still_starts_leaves_nothing_behind(tmp_path, monkeypatch):
+    """The worker starts the factory before it imports nbgrader (``start`` does not wait for it); a
+    worker that fails at once stops a factory still importing torch, and nothing of it may survive."""
+    root = tmp_path / "run"
+    for d in ("sockets", "runtime", "grading/cases", "work"):
+        (root / d).mkdir(parents=True)
+    os.chmod(tmp_path, 0o755)
+    uid = sandbox.student_uid(9)
+    settings = {"socket_dir": str(root / "sockets"), "grading_dir": str(root / "grading"), "uid": uid,
+                "limits": dict(sandbox.DEFAULT_LIMITS), "shared_cache": None,
+                "zygote_state": str(root / "zygote.json"), "connections_dir": str(root / "connections")}
+    zygote = sandbox.Zygote(settings, root / "work")
+    started = time.monotonic()
+    zygote.start()
+    assert time.monotonic() - started < 1.0 and not (root / "sockets" / "zygote").exists()   # not waited for
+    zygote.stop()
+    left = []
+    for pid in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            status = Path(f"/proc/{pid}/status").read_text()
+        except OSError:
+            continue
+        if int(status.split("Uid:")[1].split()[0]) == uid:
+            left.append(pid)
+    assert left == [] and zygote.proc is None and not (root / "zygote.json").exists()
+
+
 def test_a_kernel_starts_its_own_sandbox_when_the_factory_is_gone(factory):
     zygote, root = factory
     zygote.stop()
