@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import os
 import platform
 import sys
 import tempfile
@@ -83,7 +82,7 @@ def main(argv=None) -> int:
     tmp = Path(tempfile.mkdtemp(prefix="bench-class-"))
     subs = tmp / "class.zip"
     ids = class_zip(executed_notebooks(args.executed, tmp), args.students, subs)
-    jobs = args.jobs or os.cpu_count()
+    jobs = args.jobs or grade.default_jobs()
     print(f"host: {host_description()}, python "
           f"{platform.python_version()}; confined: {sandbox.available()[0]}; {len(ids)} students "
           f"({', '.join(KINDS)}, cycled); jobs {jobs}", flush=True)
