@@ -146,7 +146,7 @@ def test_the_wall_clock_stops_a_notebook_and_the_next_one_still_runs(factory):
     assert run_kernel(root, "print(6 * 7)").strip() == "42"
 
 
-def test_a_factory_stopped_while_it_still_starts_leaves_nothing_behind(tmp_path, monkeypatch):
+def test_a_factory_stopped_while_it_still_starts_leaves_nothing_behind(tmp_path, processes_of):
     """The worker starts the factory before it imports nbgrader (``start`` does not wait for it); a
     worker that fails at once stops a factory still importing torch, and nothing of it may survive."""
     root = tmp_path / "run"
@@ -162,15 +162,7 @@ def test_a_factory_stopped_while_it_still_starts_leaves_nothing_behind(tmp_path,
     zygote.start()
     assert time.monotonic() - started < 1.0 and not (root / "sockets" / "zygote").exists()   # not waited for
     zygote.stop()
-    left = []
-    for pid in filter(str.isdigit, os.listdir("/proc")):
-        try:
-            status = Path(f"/proc/{pid}/status").read_text()
-        except OSError:
-            continue
-        if int(status.split("Uid:")[1].split()[0]) == uid:
-            left.append(pid)
-    assert left == [] and zygote.proc is None and not (root / "zygote.json").exists()
+    assert processes_of({uid}) == [] and zygote.proc is None and not (root / "zygote.json").exists()
 
 
 def test_a_kernel_starts_its_own_sandbox_when_the_factory_is_gone(factory):
