@@ -208,6 +208,7 @@ def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | Non
     {test id: the raw results its kernel saved, base64, or None}, "verdicts": {}}}; grade_task
     judges the results (``judge_results``), so that this process never needs torch.
     ``shared``: a folder of stages computed once for the whole batch, which the kernels read."""
+    from kernels import GradingKernelManager
     from traitlets.config import PyFileConfigLoader
 
     sandbox.die_with_parent()
@@ -234,6 +235,7 @@ def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | Non
     # to shut down: a polite shutdown waits about 1.3 s per notebook for the kernel to exit
     # (benchmarks/grading_wallclock.txt), and a killed sandbox takes every process in it along.
     config.Execute.shutdown_kernel = "immediate"
+    config.Execute.kernel_manager_class = GradingKernelManager    # notices the killed kernel within 10 ms
     config.KernelManager.transport = "ipc"
     config.KernelManager.ip = str(sockets / "k")
     zygote = None
