@@ -40,12 +40,16 @@ def executed_notebooks(executed: Path | None, tmp: Path) -> Path:
     return executed
 
 
+def command_line(doc: str, argv, repeats: int, prefix: str):
+    """The grading benchmarks' two options, parsed; and a fresh folder for the run."""
+    p = argparse.ArgumentParser(description=doc.split("\n\n")[0])
+    p.add_argument("--executed", type=Path, help="executed solution notebooks (default: run them now, smoke mode)")
+    p.add_argument("--repeats", type=int, default=repeats)
+    return p.parse_args(argv), Path(tempfile.mkdtemp(prefix=prefix))
+
+
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--executed", type=Path, help="executed solution notebooks (default: run them now)")
-    p.add_argument("--repeats", type=int, default=1)
-    args = p.parse_args(argv)
-    tmp = Path(tempfile.mkdtemp(prefix="bench-grading-"))
+    args, tmp = command_line(__doc__, argv, 1, "bench-grading-")
     executed = executed_notebooks(args.executed, tmp)
     subs = tmp / "one.zip"
     with zipfile.ZipFile(subs, "w") as zf:

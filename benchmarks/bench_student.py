@@ -14,12 +14,10 @@ belong to this host.
 
 from __future__ import annotations
 
-import argparse
 import json
 import statistics
 import subprocess
 import sys
-import tempfile
 import time
 import zipfile
 from datetime import datetime
@@ -32,7 +30,7 @@ import grade  # noqa: E402
 import sandbox  # noqa: E402
 from bench import host_description  # noqa: E402
 from bench_class import class_zip  # noqa: E402
-from bench_grading import executed_notebooks  # noqa: E402
+from bench_grading import command_line, executed_notebooks  # noqa: E402
 
 SHIM = Path(__file__).resolve().parent / "_worker_timing.py"
 
@@ -77,11 +75,7 @@ def graded_once(course: Path, zip_path: Path, student: str, timing_file: Path) -
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--executed", type=Path, help="executed solution notebooks (default: run them now, smoke mode)")
-    p.add_argument("--repeats", type=int, default=3)
-    args = p.parse_args(argv)
-    tmp = Path(tempfile.mkdtemp(prefix="bench-student-"))
+    args, tmp = command_line(__doc__, argv, 3, "bench-student-")
     zip_path = tmp / "class.zip"
     student = class_zip(executed_notebooks(args.executed, tmp), 1, zip_path)[0]    # a correct hand-in
     one = tmp / "correct.zip"
