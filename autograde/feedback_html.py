@@ -24,9 +24,10 @@ from nbconvert.filters.widgetsdatatypefilter import WidgetsDataTypeFilter
 
 ALT_TEXT = "No description has been provided for this image"   # nbconvert's own words
 
-# comments and text-only elements: what they hold is never a tag
-_RAW_TEXT = re.compile(r"<!--.*?-->|<(?P<raw>script|style|textarea|title)\b.*?</(?P=raw)\s*>",
-                       re.IGNORECASE | re.DOTALL)
+# comments and text-only elements: what they hold is never a tag. Only their start is matched by a
+# pattern; their end is searched for from there, once, so a page full of unclosed ones (a student's
+# output can be anything) stays linear to scan; an unclosed one runs to the end, as for an HTML parser.
+_RAW_START = re.compile(r"<!--|<(script|style|textarea|title)\b", re.IGNORECASE)
 _VALUE = r"""(?:"[^"]*"|'[^']*'|[^\s"'=<>`]+)"""
 _ATTR = re.compile(rf"""([^\s"'>/=]+)(?:\s*=\s*({_VALUE}))?""")
 _START = re.compile(rf"""<([a-zA-Z][a-zA-Z0-9]*)((?:\s+[^\s"'>/=]+(?:\s*=\s*{_VALUE})?)*)\s*(/?)>""")
@@ -72,10 +73,16 @@ def _edit_tags(html: str) -> tuple[str, int]:
         return m.group(0)
 
     out, last = [], 0
-    for raw in _RAW_TEXT.finditer(html):
+    while (raw := _RAW_START.search(html, last)) is not None:
+        if raw.group(1) is None:
+            close = html.find("-->", raw.end())
+            end = len(html) if close < 0 else close + 3
+        else:
+            close = re.compile(rf"</{raw.group(1)}\s*>", re.IGNORECASE).search(html, raw.end())
+            end = len(html) if close is None else close.end()
         out.append(_START.sub(edit, html[last:raw.start()]))
-        out.append(raw.group(0))
-        last = raw.end()
+        out.append(html[raw.start():end])
+        last = end
     out.append(_START.sub(edit, html[last:]))
     return "".join(out), missing_alt
 
