@@ -25,9 +25,10 @@ def figure(draw):
     grading; building them (axes, artists, ``tight_layout``'s text measurements) still cost time:
     not building them took the six autogrades of one correct hand-in from 10.5 s to 6-7 s
     (``benchmarks/grading_wallclock.txt``). So under nbgrader the decorated function returns None
-    without running, and ``show(None, name)`` has nothing to close. Anything a figure function is given, a learner's reward function included,
-    is therefore not evaluated for the figure while grading; what is graded is computed outside
-    the figures, in every student's kernel. Outside nbgrader (the chapter, the tests) nothing changes.
+    without running, and ``show(None, name)`` has nothing to close. Anything a figure function is
+    given, a learner's reward function included, is therefore not evaluated for the figure while
+    grading; what is graded is computed outside the figures, in every student's kernel. Outside
+    nbgrader (the chapter, the tests) nothing changes.
     """
     @functools.wraps(draw)
     def wrapper(*args, **kwargs):
