@@ -126,7 +126,7 @@ def load_expert_data(run_seed: int, n_episodes: int, n_val_episodes: int, seq_le
     data = ExpertData(train_obs, train_act, val_obs, val_act, flat.mean(0), np.maximum(flat.std(0), 1e-6))
     if path is not None:
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(".tmp.npz")
+        tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")   # its own: run_many's workers share a cache
         np.savez(tmp, **data.__dict__)
         os.replace(tmp, path)   # atomic: a half-written cache file is never read
     return data

@@ -116,7 +116,7 @@ def _cached(path, build):
     stage = build()
     if path is not None:
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(".tmp")
+        tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")   # its own: run_many's workers share a cache
         torch.save(stage, tmp)
         os.replace(tmp, path)
     return stage

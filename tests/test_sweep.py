@@ -1,0 +1,133 @@
+"""pusht.sweep.run_many: a sweep's runs on several cores give exactly the numbers of running them here.
+
+The configs are tiny but not flagged smoke (run_many runs smoke configs in-process, since a worker
+takes longer to start than they take to run), so the pool really starts: two spawned processes.
+"""
+
+import numpy as np
+import pytest
+import torch
+
+from pusht import sweep
+from pusht.config import make_config
+from pusht.dreamer import run
+from pusht.sweep import default_workers, run_many
+
+
+def tiny(**changes):
+    """The smoke config's sizes as a learner's own small config (not flagged smoke)."""
+    return make_config(smoke=True).replace(smoke=False, **changes)
+
+
+def same_run(a, b) -> bool:
+    if a.metrics != b.metrics or a.history.keys() != b.history.keys():
+        return False
+    if not all(np.array_equal(a.history[k], b.history[k]) for k in a.history):
+        return False
+    sa, sb = a.agent.state_dict(), b.agent.state_dict()
+    return sa.keys() == sb.keys() and all(torch.equal(sa[k], sb[k]) for k in sa)
+
+
+def test_a_sweep_on_two_workers_gives_the_numbers_of_running_it_here(tmp_path):
+    # Two world models (seeds 0 and 1) and, on seed 0's, two horizons: with an empty stage cache
+    # seed 0's model is trained by one task that the two runs on it wait for.
+    cfgs = [tiny(seed=0, imag_horizon=5), tiny(seed=1), tiny(seed=0, imag_horizon=8, actor_seed=1)]
+    here = [run(c, cache_dir=tmp_path / "data", log=None) for c in cfgs]
+    pooled = run_many(cfgs, cache_dir=tmp_path / "data", model_cache=tmp_path / "cache", workers=2)
+    assert [r.cfg for r in pooled] == cfgs, "results come back in the order of the configs"
+    for c, a, b in zip(cfgs, here, pooled):
+        assert same_run(a, b), f"{sweep.describe(c)}: the pooled run differs from the same run in this process"
+    assert len(list((tmp_path / "cache").glob("wm_*.pt"))) == 2
+    assert len(list((tmp_path / "cache").glob("agent_*.pt"))) == 3
+    assert not list((tmp_path / "cache").glob("*.tmp")), "a half-written cache file was left behind"
+    # a second sweep finds every agent in the cache and so starts no pool, with the same numbers
+    again = run_many(cfgs, cache_dir=tmp_path / "data", model_cache=tmp_path / "cache", workers=2)
+    assert all(same_run(a, b) for a, b in zip(here, again))
+
+
+class NoPool:
+    def __init__(self, *args, **kwargs):
+        raise AssertionError("run_many started a process pool")
+
+
+def test_smoke_configs_and_a_single_run_start_no_pool(monkeypatch, tmp_path):
+    monkeypatch.setattr(sweep, "ProcessPoolExecutor", NoPool)
+    smoke = [make_config(smoke=True, seed=s) for s in (0, 1)]
+    assert [r.cfg for r in run_many(smoke, cache_dir=tmp_path, workers=2)] == smoke
+    assert len(run_many([tiny()], cache_dir=tmp_path, workers=4)) == 1
+    assert run_many([], workers=2) == []
+
+
+def test_a_run_that_fails_in_a_worker_raises_its_own_error_naming_the_run(tmp_path):
+    blocker = tmp_path / "not_a_folder"
+    blocker.write_text("a file where the stage cache should be\n")
+    cfgs = [tiny(seed=0), tiny(seed=1)]
+    with pytest.raises(OSError) as info:       # each worker fails to create the cache folder
+        run_many(cfgs, cache_dir=tmp_path / "data", model_cache=blocker / "cache", workers=2)
+    assert any("raised in a worker process by the world model of seed=" in n
+               for n in getattr(info.value, "__notes__", [])), info.value
+
+
+def test_how_many_workers(monkeypatch):
+    cfgs = [make_config(seed=0)]
+    monkeypatch.delenv("NBGRADER_EXECUTION", raising=False)
+    monkeypatch.delenv(sweep.WORKERS_ENV, raising=False)
+    assert default_workers(cfgs) == sweep.usable_cores()
+    assert default_workers([make_config(seed=0, threads=2)]) == max(sweep.usable_cores() // 2, 1)
+    assert default_workers([cfgs[0].replace(device="cuda")]) == 1
+    monkeypatch.setenv(sweep.WORKERS_ENV, "3")
+    assert default_workers(cfgs) == 3
+    for bad in ("0", "two", "-1", "1.5"):
+        monkeypatch.setenv(sweep.WORKERS_ENV, bad)
+        with pytest.raises(ValueError, match=sweep.WORKERS_ENV):
+            default_workers(cfgs)
+    monkeypatch.delenv(sweep.WORKERS_ENV)
+    monkeypatch.setenv("NBGRADER_EXECUTION", "autograde")   # the grader runs a kernel per core already
+    assert default_workers(cfgs) == 1
+    with pytest.raises(ValueError, match="workers"):
+        run_many(cfgs, workers=0)
+    with pytest.raises(TypeError, match="Config"):
+        run_many([{"seed": 0}])
+
+
+
+def fake_cgroup(monkeypatch, tmp_path, files: dict, meminfo_kb: int = 64 * 2**20):
+    """A cgroup folder holding ``files`` (name -> content), as the only one that limits this process."""
+    d = tmp_path / "cgroup"
+    d.mkdir(parents=True)
+    for name, text in files.items():
+        (d / name).write_text(text + "\n")
+    monkeypatch.setattr(sweep, "_cgroup_dirs", lambda controller: [d])
+    real_read = sweep._read
+    monkeypatch.setattr(sweep, "_read", lambda path: f"MemAvailable: {meminfo_kb} kB"
+                        if str(path) == "/proc/meminfo" else real_read(path))
+
+
+@pytest.mark.parametrize("files, cores", [({"cpu.max": "max 100000"}, None),          # cgroup v2, no quota
+                                          ({"cpu.max": "150000 100000"}, 1),          # v2: 1.5 CPUs
+                                          ({"cpu.cfs_quota_us": "-1", "cpu.cfs_period_us": "100000"}, None),
+                                          ({"cpu.cfs_quota_us": "300000", "cpu.cfs_period_us": "100000"}, 3)])
+def test_a_cgroup_cpu_quota_narrows_the_cores(monkeypatch, tmp_path, files, cores):
+    monkeypatch.setattr(sweep.os, "sched_getaffinity", lambda pid: set(range(16)))   # a big Binder node
+    fake_cgroup(monkeypatch, tmp_path, files)
+    assert sweep.usable_cores() == (16 if cores is None else cores)
+
+
+def test_a_memory_limit_caps_the_workers(monkeypatch, tmp_path):
+    # Binder: a 2 GB limit, a kernel already using 1.5 GB of it: no room for a worker, so the sweep
+    # runs in the kernel
+    monkeypatch.delenv("NBGRADER_EXECUTION", raising=False)
+    monkeypatch.delenv(sweep.WORKERS_ENV, raising=False)
+    monkeypatch.setattr(sweep.os, "sched_getaffinity", lambda pid: set(range(16)))
+    fake_cgroup(monkeypatch, tmp_path, {"memory.max": str(2 * 2**30), "memory.current": str(int(1.5 * 2**30))})
+    assert sweep.available_memory() == 2**29
+    assert default_workers([make_config()]) == 1
+    (tmp_path / "cgroup" / "memory.max").write_text("max\n")     # no limit: only the cores count
+    assert default_workers([make_config()]) == 16
+    (tmp_path / "cgroup" / "memory.max").write_text(f"{int(1.5 * 2**30) + 3 * sweep.WORKER_BYTES}\n")
+    assert default_workers([make_config()]) == 3
+    # cgroup v1 names, and the machine's own MemAvailable when it is the tighter
+    fake_cgroup(monkeypatch, tmp_path / "v1", {"memory.limit_in_bytes": str(2**62),
+                                               "memory.usage_in_bytes": str(2**30)},
+                meminfo_kb=2 * sweep.WORKER_BYTES // 1024)
+    assert default_workers([make_config()]) == 2
