@@ -75,7 +75,9 @@ NOTEBOOKS = sorted(p.name for p in (ROOT / "solutions").glob("*.ipynb"))
 # The completion task cell of each predict-then-run exercise: "<ex>_order".
 EXERCISES = {"ex1": "04_imagination_gap", "ex2": "05_horizon", "ex3": "06_closing_the_gap"}
 FEEDBACK_OUTPUT_CHARS = 20_000      # per output in a feedback page; the rest is cut with a note
-FEEDBACK_NOTEBOOK_CHARS = 2_000_000  # all outputs of one notebook together
+FEEDBACK_NOTEBOOK_CHARS = 2_000_000  # all outputs of one notebook together; all its cells' text too
+FEEDBACK_SOURCE_CHARS = 20_000      # per cell's text (markdown or code) in a feedback page
+FEEDBACK_TIMEOUT = 120              # seconds one student's feedback pages may take before they are skipped
 WIDGET = "application/vnd.jupyter.widget-view+json"
 ZYGOTE_ENV = "PUSHT_GRADING_ZYGOTE"   # "0": a new sandboxed kernel per notebook, no kernel factory
 HIDDEN_NOTE = "# (hidden tests: run by the grader; their verdict is printed below)\n"
@@ -689,51 +691,99 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
         gb.db.commit()
     record(course, report, results)
     sanitize_feedback_sources(course, report)
-    generate_feedback(course, [s for s in report if results.get(s)], jobs, log)
+    for student, error in generate_feedback(course, [s for s in report if results.get(s)], jobs, log).items():
+        report[student]["notes"].append(f"no feedback pages: {error}")
     export(course, report, got.rejected)
     return report
 
 
-def generate_feedback(course: Path, students: list[str], jobs: int, log=print) -> None:
-    """nbgrader's feedback pages for ``students``, ``jobs`` processes at once.
+def generate_feedback(course: Path, students: list[str], jobs: int, log=print,
+                      timeout: float = FEEDBACK_TIMEOUT) -> dict:
+    """nbgrader's feedback pages for ``students``, ``jobs`` processes at once; {student: error} for
+    the students whose pages could not be made (their grades stand).
 
     Each student's pages depend only on their autograded notebooks and their rows in the gradebook,
     which every process only reads, so they can be made side by side (nbgrader's own
     ``generate_feedback`` makes them one student after another; benchmarks/grading_wallclock.txt
-    has what that cost). The pages are the same whichever process makes them."""
+    has what that cost). The pages are the same whichever process makes them.
+
+    A student whose pages take more than ``timeout`` seconds (a submission built to be slow to
+    render) loses their pages, not the batch: their process is killed, their half-made pages are
+    removed, and the students after them get a new process. The pages are capped in size before
+    (``sanitize_feedback_sources``), so a real notebook takes a few seconds at most."""
     students = sorted(students)
+    errors: dict = {}
     n = max(1, min(jobs, len(students)))
-    if n == 1:
-        errors = _feedback_for(course, students)
-    else:
-        errors = {}
-        with tempfile.TemporaryDirectory(prefix="pusht-feedback-") as tmp:
-            procs = []
-            for i in range(n):
-                chunk, answer, err = students[i::n], Path(tmp) / f"{i}.json", Path(tmp) / f"{i}.err"
-                args = json.dumps({"course": str(course), "students": chunk, "answer": str(answer)})
-                with open(err, "w") as stderr:       # a file, not a pipe: no process waits on a full one
-                    procs.append((chunk, answer, err, subprocess.Popen(
-                        [sys.executable, str(Path(__file__).resolve()), "--feedback", args], cwd=course,
-                        stdout=subprocess.DEVNULL, stderr=stderr, env=tool_env())))
-            for chunk, answer, err, proc in procs:
-                proc.wait()
-                if proc.returncode == 0 and answer.is_file():
-                    errors.update(json.loads(answer.read_text()))
-                else:
-                    errors.update({s: _last_error(err.read_text(errors="replace")) for s in chunk})
+    with tempfile.TemporaryDirectory(prefix="pusht-feedback-") as tmp:
+        queue = [students[i::n] for i in range(n) if students[i::n]]
+        running, count = [], 0
+
+        def start(chunk):
+            nonlocal count
+            count += 1
+            done, err = Path(tmp) / f"{count}.jsonl", Path(tmp) / f"{count}.err"
+            args = json.dumps({"course": str(course), "students": chunk, "answer": str(done)})
+            with open(err, "w") as stderr:       # a file, not a pipe: no process waits on a full one
+                proc = subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "--feedback", args],
+                                        cwd=course, stdout=subprocess.DEVNULL, stderr=stderr, env=tool_env(),
+                                        start_new_session=True)
+            running.append({"chunk": chunk, "done": done, "err": err, "proc": proc, "seen": 0,
+                            "since": time.monotonic()})
+
+        for chunk in queue:
+            start(chunk)
+        while running:
+            time.sleep(0.05)
+            for job in list(running):
+                finished = []
+                for line in job["done"].read_text().splitlines() if job["done"].exists() else []:
+                    try:
+                        finished.append(json.loads(line))
+                    except ValueError:           # a line being written as we read
+                        break
+                if len(finished) > job["seen"]:
+                    job["seen"], job["since"] = len(finished), time.monotonic()
+                left = job["chunk"][len(finished):]
+                exited = job["proc"].poll() is not None
+                late = not exited and time.monotonic() - job["since"] > timeout
+                if not (exited or late):
+                    continue
+                running.remove(job)
+                errors.update({f["student"]: f["error"] for f in finished if f["error"]})
+                if late:
+                    try:
+                        os.killpg(job["proc"].pid, signal.SIGKILL)
+                    except ProcessLookupError:
+                        pass
+                    job["proc"].wait()
+                if not left:
+                    continue
+                stuck = left[0]
+                errors[stuck] = (f"its feedback pages took more than {timeout:g} s to make and were "
+                                 "skipped (the grades are recorded)" if late else
+                                 _last_error(job["err"].read_text(errors="replace")))
+                shutil.rmtree(course / "feedback" / stuck / ASSIGNMENT, ignore_errors=True)
+                if left[1:]:
+                    start(left[1:])
     for student, error in sorted(errors.items()):
         log(f"nbgrader generate_feedback failed for {student}: {error}")
+    return errors
 
 
-def _feedback_for(course: Path, students: list[str]) -> dict:
-    """Feedback for each of ``students`` in this process; returns {student: error} for failures."""
+def _feedback_for(course: Path, students: list[str], answer: Path | None = None) -> dict:
+    """Feedback for each of ``students`` in this process; returns {student: error} for failures.
+    With ``answer``, each student's outcome is also appended to that file as one JSON line the
+    moment it is known (the parent's clock runs per student)."""
     api = nbgrader_api(course)
     errors = {}
     for student in students:
         res = api.generate_feedback(ASSIGNMENT, student_id=student, force=True)
-        if not res.get("success"):
-            errors[student] = _last_error(res.get("error") or res.get("log") or "")
+        error = None if res.get("success") else _last_error(res.get("error") or res.get("log") or "")
+        if error:
+            errors[student] = error
+        if answer is not None:
+            with open(answer, "a") as f:
+                f.write(json.dumps({"student": student, "error": error}) + "\n")
     return errors
 
 
@@ -819,11 +869,12 @@ def sanitize_feedback_sources(course: Path, report: dict) -> None:
         for path in folder.glob("*.ipynb"):
             nb = nbformat.read(path, as_version=4)
             nb.metadata.pop("widgets", None)
-            budget = FEEDBACK_NOTEBOOK_CHARS
+            budget = text_budget = FEEDBACK_NOTEBOOK_CHARS
             for cell in nb.cells:
                 g = repair.gid(cell)
                 if cell.cell_type == "code" and "### BEGIN HIDDEN TESTS" in cell.source:
                     cell.source = _strip_hidden(cell.source)
+                text_budget = _cap_source(cell, text_budget)
                 if g in rep["verdicts"]:
                     score, max_score, msg = rep["verdicts"][g]
                     cell.outputs = _without_grader_lines(cell.get("outputs", []))
@@ -884,6 +935,21 @@ def _strip_hidden(src: str) -> str:
     return "".join(out)
 
 
+def _cap_source(cell, budget: int) -> int:
+    """A cell's text cut at FEEDBACK_SOURCE_CHARS, or removed once the notebook's texts have used
+    ``budget``; returns what is left of it. Rendering is linear but not fast (nbconvert's markdown
+    took about 7 s per million characters of the slowest text tried), and a hand-in may be 50 MB."""
+    source = cell.get("source", "")
+    if len(source) <= min(FEEDBACK_SOURCE_CHARS, budget):
+        return budget - len(source)
+    note = (f"[... this cell's text is cut at {FEEDBACK_SOURCE_CHARS} characters in the feedback page]"
+            if budget >= FEEDBACK_SOURCE_CHARS else
+            "[... this cell's text is left out of the feedback page: the page is capped in size]")
+    keep = source[:FEEDBACK_SOURCE_CHARS] if budget >= FEEDBACK_SOURCE_CHARS else ""
+    cell.source = keep + (f"\n# {note}\n" if cell.cell_type == "code" else f"\n\n*{note}*\n")
+    return max(budget - len(keep), 0)
+
+
 def _cap_outputs(cell, budget: int) -> int:
     kept = []
     for o in cell.get("outputs", []):
@@ -935,7 +1001,7 @@ def main(argv=None) -> int:
         return 0
     if argv[:1] == ["--feedback"]:
         a = json.loads(argv[1])
-        Path(a["answer"]).write_text(json.dumps(_feedback_for(Path(a["course"]), a["students"])))
+        _feedback_for(Path(a["course"]), a["students"], Path(a["answer"]))
         return 0
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("submissions", type=Path, help="a .zip from the LMS, or a folder of notebooks")

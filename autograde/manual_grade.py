@@ -17,7 +17,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from grade import ASSIGNMENT, COURSE_ID, nbgrader  # noqa: E402
+from grade import ASSIGNMENT, COURSE_ID, generate_feedback, nbgrader  # noqa: E402
 
 FIELDS = ["student_id", "notebook", "grade_id", "score", "comment"]
 
@@ -47,7 +47,8 @@ def set_manual_grade(student: str, notebook: str, grade_id: str, score: float, c
         w = csv.DictWriter(f, FIELDS)
         w.writeheader()
         w.writerows(sorted(rows, key=lambda r: (r["student_id"], r["notebook"], r["grade_id"])))
-    nbgrader(course, "generate_feedback", ASSIGNMENT, "--force", f"--student={student}")
+    # the same pages, exporter and time limit as grade.py's; a page that cannot be made is said, not silent
+    generate_feedback(course, [student], jobs=1, log=lambda line: print(line, file=sys.stderr))
     nbgrader(course, "export", f"--to={course / 'grades.csv'}")
 
 

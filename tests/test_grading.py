@@ -150,6 +150,51 @@ def test_feedback_pages_are_the_documents_nbgraders_own_exporter_makes(graded, t
             assert BeautifulSoup(page.read_text(), "html.parser") == BeautifulSoup(theirs, "html.parser"), page
 
 
+def test_a_student_whose_feedback_never_finishes_loses_only_their_pages(graded, tmp_path):
+    """A page that takes too long (here: a notebook of 5 million characters of nbconvert's slowest
+    markdown, some 35 s to render, with the size caps bypassed) is given up after ``timeout``; the
+    students after it, in the same process before, get theirs from a new one."""
+    import shutil
+
+    import nbformat
+
+    course, _, _ = graded
+    copy = tmp_path / "course"
+    shutil.copytree(course, copy, ignore=shutil.ignore_patterns("feedback"))
+    slow = copy / "autograded" / "perfect" / grade.ASSIGNMENT / "02_reward.ipynb"
+    nb = nbformat.read(slow, as_version=4)
+    nb.cells.append(nbformat.v4.new_markdown_cell("\n- [" * 1_250_000))
+    nbformat.write(nb, slow)
+    lines = []
+    t = time.perf_counter()
+    errors = grade.generate_feedback(copy, ["wrong", "perfect", "colab"], jobs=1, log=lines.append, timeout=20)
+    assert time.perf_counter() - t < 60
+    assert list(errors) == ["perfect"] and "took more than 20 s" in errors["perfect"], errors
+    assert not (copy / "feedback" / "perfect").joinpath(grade.ASSIGNMENT).exists(), "no half-made pages"
+    for student in ("colab", "wrong"):      # before and after the slow one, in sorted order
+        assert sorted((copy / "feedback" / student / grade.ASSIGNMENT).glob("*.html")), student
+    assert any("perfect" in line and "took more than" in line for line in lines)
+
+
+def test_feedback_pages_are_capped_in_text_too():
+    import nbformat
+
+    cap, budget = grade.FEEDBACK_SOURCE_CHARS, grade.FEEDBACK_NOTEBOOK_CHARS
+    small = nbformat.v4.new_markdown_cell("A short answer.")
+    assert grade._cap_source(small, budget) == budget - len("A short answer.")
+    assert small.source == "A short answer."
+    big = nbformat.v4.new_markdown_cell("x" * (cap + 1))
+    left = grade._cap_source(big, budget)
+    assert big.source.startswith("x" * cap) and f"cut at {cap} characters" in big.source
+    assert left == budget - cap
+    code = nbformat.v4.new_code_cell("y = 1\n" * cap)
+    grade._cap_source(code, budget)
+    assert code.source.splitlines()[-1].startswith("# [... this cell's text is cut")     # still Python
+    late = nbformat.v4.new_markdown_cell("q" * 100)       # more than the notebook has left: left out
+    assert grade._cap_source(late, 50) == 50 and "q" not in late.source and "left out" in late.source
+    assert grade._cap_source(nbformat.v4.new_markdown_cell("w" * 40), 50) == 10   # a smaller one still fits
+
+
 def test_mark_scheme_reaches_students_through_feedback_only(graded):
     course, _, _ = graded
     feedback = (course / "feedback" / "perfect" / grade.ASSIGNMENT / "04_imagination_gap.html").read_text()
