@@ -9,6 +9,11 @@ very code a single :func:`pusht.dreamer.run` runs, seeded by its own config, so 
 the one that run gives in this process (``tests/test_sweep.py`` checks it bit for bit); only the
 wall-clock changes.
 
+The longest runs start first (:func:`expected_work`: the steps their actors dream), so that no
+long run is left to finish alone on one core at the end. :func:`start_many` starts the workers and
+returns at once, leaving this process free for work of its own until it asks for the results
+(notebook 03 trains the learner's agent in the kernel meanwhile).
+
 With a stage cache (``model_cache``), runs that share a world model (the horizons and actor seeds
 of notebook 05) wait for one worker to train it and then load it, instead of each training it
 again. Without one, every run trains its own, as ``run`` does.
@@ -26,6 +31,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import threading
 from pathlib import Path
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -161,14 +167,184 @@ def _run_task(cfg, cache_dir, model_cache):
 
 def _stop(pool: ProcessPoolExecutor) -> None:
     """Stop a pool now: drop what has not started and end the workers (their runs are lost)."""
-    pool.shutdown(wait=False, cancel_futures=True)
     terminate = getattr(pool, "terminate_workers", None)      # Python 3.14+
     if terminate is not None:
         terminate()
         return
-    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+    # Before 3.14 the workers are ended by hand; shutdown() forgets them, so they are read first.
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in procs:
         if proc.is_alive():
             proc.terminate()
+
+
+def expected_work(cfg: Config) -> int:
+    """How long a run of ``cfg`` takes, relatively: the dreamed steps its actor trains on (updates x
+    dreams x horizon, times the ensemble's members). A horizon-30 run of notebook 05 takes about twice
+    a horizon-15 one. Only the order matters: :func:`start_many` starts the longest runs first."""
+    return cfg.imag_iters * cfg.imag_batch * cfg.imag_horizon * cfg.ensemble_size
+
+
+class Sweep:
+    """The runs of :func:`start_many`: the pooled ones are under way in worker processes from the
+    start; :meth:`results` runs the others in this process and waits for all of them.
+
+    Use it as a context manager where this process has work of its own meanwhile: leaving the block
+    with an error, or without having collected the results, stops the workers."""
+
+    def __init__(self, cfgs, cache_dir, model_cache, workers: int | None, desc: str):
+        from .dreamer import AGENT_FIELDS, AGENT_MODULES, WM_FIELDS, WM_MODULES, _cache_path
+
+        self.cfgs, self.cache_dir, self.model_cache, self.desc = cfgs, cache_dir, model_cache, desc
+        self._results: list = [None] * len(cfgs)
+        self._done = False
+        self._pool = None
+        self._jobs: dict = {}               # future -> ("wm", path) or ("run", index)
+        self._waiting: dict = {}            # world-model cache path -> indices of the runs that need it
+        self._cond = threading.Condition(threading.RLock())   # guards _jobs; told of each new run
+
+        # A worker takes about 2 s to start, more than a smoke run or a run whose trained agent is in
+        # the cache (only its evaluation is left): those run here.
+        def agent_cached(c):
+            path = _cache_path(model_cache, "agent", c, AGENT_FIELDS, AGENT_MODULES)
+            return path is not None and cached_file(path) is not None
+
+        pooled = [i for i, c in enumerate(cfgs) if not c.smoke and not agent_cached(c)]
+        if workers is None or workers < 2 or len(pooled) < 2:
+            pooled = []
+        self.here = sorted(set(range(len(cfgs))) - set(pooled))
+        self.pooled = sorted(pooled, key=lambda i: -expected_work(cfgs[i]))    # longest first
+        if not self.pooled:
+            return
+
+        # Runs that share an uncached world model wait for one task to train it (keyed as its cache is).
+        ready: list = []
+        for i in self.pooled:
+            path = _cache_path(model_cache, "wm", cfgs[i], WM_FIELDS, WM_MODULES)
+            if path is None or cached_file(path) is not None:
+                ready.append(i)
+            else:
+                self._waiting.setdefault(path, []).append(i)
+        self._pool = ProcessPoolExecutor(max_workers=min(workers, len(self.pooled)),
+                                         mp_context=multiprocessing.get_context("spawn"))
+        with self._cond:
+            for path, indices in self._waiting.items():
+                fut = self._pool.submit(_world_model_task, cfgs[indices[0]], cache_dir, model_cache)
+                self._jobs[fut] = ("wm", path)
+                fut.add_done_callback(lambda f, path=path: self._world_model_done(f, path))
+            for i in ready:
+                self._submit_run(i)
+
+    def _submit_run(self, i: int) -> None:
+        with self._cond:
+            self._jobs[self._pool.submit(_run_task, self.cfgs[i], self.cache_dir, self.model_cache)] = ("run", i)
+            self._cond.notify_all()
+
+    def _world_model_done(self, fut, path) -> None:
+        """A world model is in the cache: start the runs that waited for it at once, even while this
+        process is busy with work of its own (called in the pool's own thread)."""
+        if fut.cancelled() or fut.exception() is not None:
+            return                          # results() raises its error
+        try:
+            for i in self._waiting[path]:
+                self._submit_run(i)
+        except RuntimeError:                # the pool is being stopped
+            pass
+
+    def _what(self, kind: str, key) -> str:
+        return (f"the world model of {describe(self.cfgs[self._waiting[key][0]])}" if kind == "wm"
+                else f"the run {describe(self.cfgs[key])}")
+
+    def results(self, progress=None) -> list:
+        """Run this process's share, wait for the workers' and return every run's
+        :class:`~pusht.dreamer.RunResult`, in the order of the configs. A run that raised stops the
+        sweep: its error is raised here, with the run named."""
+        from .dreamer import run
+
+        if self._done:
+            return self._results
+        try:
+            for i in self.here:
+                self._results[i] = run(self.cfgs[i], cache_dir=self.cache_dir, model_cache=self.model_cache,
+                                       log=None, progress=progress)
+            if self._pool is not None:
+                self._collect(progress)
+        except BaseException:           # an error or an interrupt: nothing else is worth waiting for
+            self.cancel()
+            raise
+        self._done = True
+        return self._results
+
+    def _collect(self, progress) -> None:
+        bar = progress(total=len(self.pooled), desc=self.desc) if progress else None
+        remaining = set(self.pooled)
+        try:
+            while remaining:
+                with self._cond:
+                    if not self._jobs:      # a world model just finished: its runs are being submitted
+                        self._cond.wait(timeout=1.0)
+                        continue
+                    pending = list(self._jobs)
+                done, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for fut in done:
+                    with self._cond:
+                        kind, key = self._jobs.pop(fut)
+                    try:
+                        value = fut.result()
+                    except BrokenProcessPool as e:
+                        raise RuntimeError(
+                            f"a worker process died during {self._what(kind, key)}: out of memory, killed, "
+                            "or (in a script) the script's code is not under `if __name__ == \"__main__\":`, "
+                            f"which Python's process pools need. Run the sweep with workers=1 (or {WORKERS_ENV}=1) "
+                            "to run it in this process instead") from e
+                    except Exception as e:
+                        e.add_note(f"(raised in a worker process by {self._what(kind, key)})")
+                        raise
+                    if kind == "run":
+                        self._results[key] = value
+                        remaining.discard(key)
+                        if bar is not None:
+                            bar.update(1)
+        finally:
+            if bar is not None:
+                bar.close()
+        self._pool.shutdown(wait=True)
+
+    def cancel(self) -> None:
+        """Stop the workers now; the runs they had not finished are lost."""
+        if self._pool is not None:
+            _stop(self._pool)
+        self._done = True
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        if not self._done:
+            self.cancel()
+        return False
+
+
+def start_many(cfgs, cache_dir=None, model_cache=None, workers: int | None = None, desc: str = "runs") -> Sweep:
+    """Start the runs of ``cfgs`` in worker processes and return at once (a :class:`Sweep`); its
+    ``results()`` gives what :func:`run_many` gives. Between the two this process is free for work of
+    its own, such as training a learner's own agent in the kernel (notebook 03) while the workers
+    train the package's.
+
+    The longest runs (:func:`expected_work`) start first, so that no long run is left to finish
+    alone at the end. Smoke configs, runs whose trained agent is already in ``model_cache``, and
+    every run where only one worker is available, run in this process, in ``results()``.
+    """
+    cfgs = list(cfgs)
+    for c in cfgs:
+        if not isinstance(c, Config):
+            raise TypeError(f"run_many takes a list of pusht.config.Config, got a {type(c).__name__}")
+        c.validate()
+    workers = default_workers(cfgs) if workers is None and cfgs else workers
+    if workers is not None and (not isinstance(workers, int) or isinstance(workers, bool) or workers < 1):
+        raise ValueError(f"workers must be a whole number of processes, 1 or more; got {workers!r}")
+    return Sweep(cfgs, cache_dir, model_cache, workers, desc)
 
 
 def run_many(cfgs, cache_dir=None, model_cache=None, workers: int | None = None, progress=None,
@@ -178,88 +354,10 @@ def run_many(cfgs, cache_dir=None, model_cache=None, workers: int | None = None,
 
     ``cache_dir`` and ``model_cache`` are ``run``'s. ``workers``: how many runs at once (module
     doc; 1 runs them one after the other in this process). Smoke configs and runs whose trained
-    agent is already in ``model_cache`` always run here: they take less time than a worker takes
-    to start (about 2 s: it imports torch). ``progress``: a tqdm-like class (``tqdm.auto.tqdm``)
-    for one bar over the pooled runs, or for each run's own bars when it runs here. A run that
-    raises stops the sweep: its error is raised here, with the run named.
+    agent is already in ``model_cache`` always run here, while the workers start: they take less
+    time than a worker takes to start (about 2 s: it imports torch). ``progress``: a tqdm-like
+    class (``tqdm.auto.tqdm``) for one bar over the pooled runs, or for each run's own bars when it
+    runs here. A run that raises stops the sweep: its error is raised here, with the run named.
     """
-    from .dreamer import AGENT_FIELDS, AGENT_MODULES, WM_FIELDS, WM_MODULES, _cache_path, run
-
-    cfgs = list(cfgs)
-    for c in cfgs:
-        if not isinstance(c, Config):
-            raise TypeError(f"run_many takes a list of pusht.config.Config, got a {type(c).__name__}")
-        c.validate()
-    workers = default_workers(cfgs) if workers is None and cfgs else workers
-    if workers is not None and (not isinstance(workers, int) or isinstance(workers, bool) or workers < 1):
-        raise ValueError(f"workers must be a whole number of processes, 1 or more; got {workers!r}")
-    results: list = [None] * len(cfgs)
-
-    def here(i):             # in this process, as run() alone would
-        results[i] = run(cfgs[i], cache_dir=cache_dir, model_cache=model_cache, log=None, progress=progress)
-
-    # A worker takes about 2 s to start, more than a smoke run or a run whose trained agent is in the
-    # cache (only its evaluation is left): those run here.
-    def agent_cached(c):
-        path = _cache_path(model_cache, "agent", c, AGENT_FIELDS, AGENT_MODULES)
-        return path is not None and cached_file(path) is not None
-
-    pooled = [i for i, c in enumerate(cfgs) if not c.smoke and not agent_cached(c)]
-    if workers is None or workers < 2 or len(pooled) < 2:
-        pooled = []
-    for i in sorted(set(range(len(cfgs))) - set(pooled)):
-        here(i)
-    if not pooled:
-        return results
-    workers = min(workers, len(pooled))
-
-    # Runs that share an uncached world model wait for one task to train it (keyed as its cache is).
-    waiting: dict = {}                  # world-model cache path -> indices of the runs that need it
-    ready: list = []
-    for i in pooled:
-        path = _cache_path(model_cache, "wm", cfgs[i], WM_FIELDS, WM_MODULES)
-        if path is None or cached_file(path) is not None:
-            ready.append(i)
-        else:
-            waiting.setdefault(path, []).append(i)
-
-    bar = progress(total=len(pooled), desc=desc) if progress else None
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
-    jobs: dict = {}                     # future -> ("wm", path) or ("run", index)
-    try:
-        for path, indices in waiting.items():
-            jobs[pool.submit(_world_model_task, cfgs[indices[0]], cache_dir, model_cache)] = ("wm", path)
-        for i in ready:
-            jobs[pool.submit(_run_task, cfgs[i], cache_dir, model_cache)] = ("run", i)
-        while jobs:
-            done, _ = wait(jobs, return_when=FIRST_COMPLETED)
-            for fut in done:
-                kind, key = jobs.pop(fut)
-                what = (f"the world model of {describe(cfgs[waiting[key][0]])}" if kind == "wm"
-                        else f"the run {describe(cfgs[key])}")
-                try:
-                    value = fut.result()
-                except BrokenProcessPool as e:
-                    raise RuntimeError(
-                        f"a worker process died during {what}: out of memory, killed, or (in a script) "
-                        "the script's code is not under `if __name__ == \"__main__\":`, which Python's "
-                        f"process pools need. Run the sweep with workers=1 (or {WORKERS_ENV}=1) to run it "
-                        "in this process instead") from e
-                except Exception as e:
-                    e.add_note(f"(raised in a worker process by {what})")
-                    raise
-                if kind == "wm":
-                    for i in waiting[key]:
-                        jobs[pool.submit(_run_task, cfgs[i], cache_dir, model_cache)] = ("run", i)
-                else:
-                    results[key] = value
-                    if bar is not None:
-                        bar.update(1)
-    except BaseException:               # an error or an interrupt: nothing else is worth waiting for
-        _stop(pool)
-        raise
-    finally:
-        if bar is not None:
-            bar.close()
-    pool.shutdown(wait=True)
-    return results
+    with start_many(cfgs, cache_dir, model_cache, workers, desc) as sweep:
+        return sweep.results(progress)

@@ -76,3 +76,21 @@ def test_the_class_benchmark_hands_in_six_notebooks_per_student_faults_included(
         assert zf.read("wrong002_02_reward.ipynb") != zf.read("perfect000_02_reward.ipynb")   # the fault is in
         assert zf.read("wrong002_01_world_model.ipynb") == zf.read("perfect000_01_world_model.ipynb")
     assert [i[:-3] for i in ids[:len(KINDS)]] == list(KINDS)
+
+
+def test_the_handwritten_bound_compares_like_with_like(capsys):
+    # bench_handwritten.py bounds what rewriting the update by hand could gain (issue 12); its figures
+    # mean something only while the hand-written dream and lambda-return give autograd's gradients.
+    import sys
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    import torch
+    from bench_handwritten import lambda_return_matrix, main
+
+    from pusht.imagination import lambda_return
+
+    rewards, values = torch.randn(7, 5), torch.randn(8, 5)
+    assert torch.allclose(lambda_return_matrix(rewards, values, 0.9, 0.7), lambda_return(rewards, values, 0.9, 0.7),
+                          atol=1e-5)
+    assert main(["--repeats", "3"]) == 0      # it checks the dream's gradients against autograd's first
+    assert "saved" in capsys.readouterr().out

@@ -4,6 +4,8 @@ The configs are tiny but not flagged smoke (run_many runs smoke configs in-proce
 takes longer to start than they take to run), so the pool really starts: two spawned processes.
 """
 
+import time
+
 import numpy as np
 import pytest
 import torch
@@ -11,7 +13,7 @@ import torch
 from pusht import sweep
 from pusht.config import make_config
 from pusht.dreamer import run
-from pusht.sweep import default_workers, run_many
+from pusht.sweep import default_workers, run_many, start_many
 
 
 def tiny(**changes):
@@ -43,6 +45,40 @@ def test_a_sweep_on_two_workers_gives_the_numbers_of_running_it_here(tmp_path):
     # a second sweep finds every agent in the cache and so starts no pool, with the same numbers
     again = run_many(cfgs, cache_dir=tmp_path / "data", model_cache=tmp_path / "cache", workers=2)
     assert all(same_run(a, b) for a, b in zip(here, again))
+
+
+def test_the_longest_runs_start_first_and_this_process_is_free_meanwhile(tmp_path):
+    # Notebook 05's sweep in small: the runs that dream longest start first, so that no long run is
+    # left to finish alone at the end. Between start_many and results() this process trains a run of
+    # its own, as notebook 03 trains the learner's agent in the kernel while the workers train the
+    # package's; the world model the pooled runs wait for is trained by a worker meanwhile.
+    cfgs = [tiny(imag_horizon=h, actor_seed=a) for h, a in ((3, 0), (12, 1), (6, 2))]
+    with start_many(cfgs, cache_dir=tmp_path / "data", model_cache=tmp_path / "cache", workers=2) as pending:
+        assert [cfgs[i].imag_horizon for i in pending.pooled] == [12, 6, 3]
+        mine = run(tiny(seed=1), cache_dir=tmp_path / "data", log=None)
+        pooled = pending.results()
+    here = [run(c, cache_dir=tmp_path / "data", log=None) for c in cfgs]
+    assert all(same_run(a, b) for a, b in zip(here, pooled)), "the order changes no number"
+    assert same_run(mine, run(tiny(seed=1), cache_dir=tmp_path / "data", log=None))
+    assert pending.results() is pooled, "results() can be asked for again"
+
+
+def test_leaving_the_block_with_an_error_stops_the_workers(tmp_path):
+    # (an interrupted kernel too: KeyboardInterrupt leaves the block the same way)
+    cfgs = [tiny(seed=0), tiny(seed=1)]
+    with pytest.raises(KeyError):
+        with start_many(cfgs, cache_dir=tmp_path / "data", model_cache=tmp_path / "cache", workers=2) as pending:
+            workers = list(pending._pool._processes.values())
+            assert len(workers) == 2
+            raise KeyError("the learner's own cell failed")
+    deadline = time.monotonic() + 10
+    for proc in workers:
+        # exitcode, not is_alive(): the pool's own thread may reap the process first, and then
+        # is_alive() can still say True for a moment
+        while proc.exitcode is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert proc.exitcode is not None, "a worker outlived the sweep it belonged to"
+        assert proc.exitcode < 0, "the worker was ended by a signal, not left to finish its run"
 
 
 class NoPool:
