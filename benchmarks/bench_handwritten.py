@@ -23,10 +23,7 @@ rewrite could gain, not code the package uses: nothing in ``pusht`` imports this
 
 from __future__ import annotations
 
-import argparse
-import statistics
 import sys
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -36,8 +33,8 @@ import torch  # noqa: E402
 import torch.nn.functional as F  # noqa: E402
 
 from bench import host_description  # noqa: E402
+from bench_ops import median_ms, setup  # noqa: E402
 from pusht.agent import ActorCritic  # noqa: E402
-from pusht.config import make_config  # noqa: E402
 from pusht.env import ACT_DIM, OBS_DIM  # noqa: E402
 from pusht.imagination import freeze, imagine, lambda_return  # noqa: E402
 from pusht.world_model import WorldModel  # noqa: E402
@@ -115,24 +112,8 @@ def lambda_return_matrix(rewards, values, gamma: float, lam: float):
     return powers @ base + ((gamma * lam) ** (H - k))[:, None] * values[-1]
 
 
-def median_ms(fn, repeats: int, warmup: int = 30) -> float:
-    for _ in range(warmup):
-        fn()
-    times = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times) * 1e3
-
-
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--repeats", type=int, default=300)
-    args = p.parse_args(argv)
-    cfg = make_config()
-    torch.set_num_threads(cfg.threads)
-    torch.manual_seed(0)
+    args, cfg = setup(argv, __doc__, repeats=300)
     B, H = cfg.imag_batch, cfg.imag_horizon
     wm = freeze(WorldModel(OBS_DIM, ACT_DIM, cfg.latent_dim, cfg.hidden_dim, cfg.embed_dim))
     agent = ActorCritic(cfg.hidden_dim + cfg.latent_dim, ACT_DIM, cfg.hidden_dim)

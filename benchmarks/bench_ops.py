@@ -81,13 +81,20 @@ def world_model_update(cfg, batch: int):
     return step
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--repeats", type=int, default=200)
+def setup(argv, doc: str, repeats: int):
+    """The command line of a timing benchmark (``--repeats``) and the default config, with the
+    config's torch threads and torch seeded: ``(args, cfg)``."""
+    p = argparse.ArgumentParser(description=doc.split("\n\n")[0])
+    p.add_argument("--repeats", type=int, default=repeats)
     args = p.parse_args(argv)
     cfg = make_config()
     torch.set_num_threads(cfg.threads)
     torch.manual_seed(0)
+    return args, cfg
+
+
+def main(argv=None) -> int:
+    args, cfg = setup(argv, __doc__, repeats=200)
     print(f"host: {host_description()}; {cfg.threads} torch thread; median of {args.repeats} calls each")
     for name, make, batch, count in (("actor-critic update", actor_critic_update, cfg.imag_batch, cfg.imag_iters),
                                      ("world-model update", world_model_update, cfg.batch_size,
