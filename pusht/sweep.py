@@ -203,6 +203,7 @@ class Sweep:
         self._jobs: dict = {}               # future -> ("wm", path) or ("run", index)
         self._waiting: dict = {}            # world-model cache path -> indices of the runs that need it
         self._cond = threading.Condition(threading.RLock())   # guards _jobs; told of each new run
+        self._start_error = None            # (what, error) if a waiting run could not be started
 
         # A worker takes about 2 s to start, more than a smoke run or a run whose trained agent is in
         # the cache (only its evaluation is left): those run here.
@@ -246,11 +247,14 @@ class Sweep:
         process is busy with work of its own (called in the pool's own thread)."""
         if fut.cancelled() or fut.exception() is not None:
             return                          # results() raises its error
-        try:
-            for i in self._waiting[path]:
+        for i in self._waiting[path]:
+            try:
                 self._submit_run(i)
-        except RuntimeError:                # the pool is being stopped
-            pass
+            except Exception as e:          # the pool broke, or is being stopped: results() says so
+                with self._cond:
+                    self._start_error = self._start_error or (("run", i), e)
+                    self._cond.notify_all()
+                return
 
     def _what(self, kind: str, key) -> str:
         return (f"the world model of {describe(self.cfgs[self._waiting[key][0]])}" if kind == "wm"
@@ -282,6 +286,9 @@ class Sweep:
         try:
             while remaining:
                 with self._cond:
+                    if self._start_error is not None:
+                        (kind, key), error = self._start_error
+                        self._raise(kind, key, error, where="while this process started")
                     if not self._jobs:      # a world model just finished: its runs are being submitted
                         self._cond.wait(timeout=1.0)
                         continue
@@ -292,15 +299,8 @@ class Sweep:
                         kind, key = self._jobs.pop(fut)
                     try:
                         value = fut.result()
-                    except BrokenProcessPool as e:
-                        raise RuntimeError(
-                            f"a worker process died during {self._what(kind, key)}: out of memory, killed, "
-                            "or (in a script) the script's code is not under `if __name__ == \"__main__\":`, "
-                            f"which Python's process pools need. Run the sweep with workers=1 (or {WORKERS_ENV}=1) "
-                            "to run it in this process instead") from e
                     except Exception as e:
-                        e.add_note(f"(raised in a worker process by {self._what(kind, key)})")
-                        raise
+                        self._raise(kind, key, e)
                     if kind == "run":
                         self._results[key] = value
                         remaining.discard(key)
@@ -310,6 +310,17 @@ class Sweep:
             if bar is not None:
                 bar.close()
         self._pool.shutdown(wait=True)
+
+    def _raise(self, kind: str, key, error: Exception, where: str = "in a worker process by"):
+        """Raise ``error``, which stopped ``kind`` ("wm" or "run") ``key``, naming the run."""
+        if isinstance(error, BrokenProcessPool):
+            raise RuntimeError(
+                f"a worker process died during {self._what(kind, key)}: out of memory, killed, "
+                "or (in a script) the script's code is not under `if __name__ == \"__main__\":`, "
+                f"which Python's process pools need. Run the sweep with workers=1 (or {WORKERS_ENV}=1) "
+                "to run it in this process instead") from error
+        error.add_note(f"(raised {where} {self._what(kind, key)})")
+        raise error
 
     def cancel(self) -> None:
         """Stop the workers now; the runs they had not finished are lost."""

@@ -63,6 +63,33 @@ def test_the_longest_runs_start_first_and_this_process_is_free_meanwhile(tmp_pat
     assert pending.results() is pooled, "results() can be asked for again"
 
 
+def test_a_pool_that_breaks_as_a_world_model_is_done_is_reported_not_waited_for(monkeypatch, tmp_path):
+    # The runs that wait for a world model are started from the pool's own thread. Should the pool
+    # break just then (a worker killed between the two tasks), the sweep must say so, not wait forever.
+    import threading
+    from concurrent.futures.process import BrokenProcessPool
+
+    def broken(self, i):
+        raise BrokenProcessPool("a worker was killed")
+
+    monkeypatch.setattr(sweep.Sweep, "_submit_run", broken)
+    cfgs = [tiny(seed=0, imag_horizon=5), tiny(seed=0, imag_horizon=8)]     # both wait for seed 0's model
+    outcome = []
+
+    def sweep_it():
+        try:
+            run_many(cfgs, cache_dir=tmp_path / "data", model_cache=tmp_path / "cache", workers=2)
+        except Exception as e:
+            outcome.append(e)
+
+    t = threading.Thread(target=sweep_it, daemon=True)
+    t.start()
+    t.join(timeout=120)
+    assert not t.is_alive(), "the sweep waited forever for runs that were never started"
+    assert isinstance(outcome[0], RuntimeError) and "worker process died" in str(outcome[0])
+    assert "imag_horizon=8" in str(outcome[0]), "the first run it could not start, the longest, is named"
+
+
 def test_leaving_the_block_with_an_error_stops_the_workers(tmp_path):
     # (an interrupted kernel too: KeyboardInterrupt leaves the block the same way)
     cfgs = [tiny(seed=0), tiny(seed=1)]
