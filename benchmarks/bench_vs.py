@@ -83,12 +83,17 @@ print(json.dumps(seconds))
 """
 
 
-def sweeps_run(tree: Path, prepared: Path, out: Path) -> dict:
-    """Notebooks 04's and 05's sweeps with ``tree``'s package, from the stage cache ``prepared``."""
+def child_seconds(tree: Path, script: str, *args, cwd: Path) -> dict:
+    """Run ``script`` in a fresh Python that imports ``tree``'s package; the JSON it prints last."""
     env = {**os.environ, "PYTHONPATH": str(tree)}
-    proc = subprocess.run([sys.executable, "-c", SWEEP_RUN, str(prepared), str(out)], cwd=tree, env=env,
+    proc = subprocess.run([sys.executable, "-c", script, *map(str, args)], cwd=cwd, env=env,
                           check=True, capture_output=True, text=True)
     return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def sweeps_run(tree: Path, prepared: Path, out: Path) -> dict:
+    """Notebooks 04's and 05's sweeps with ``tree``'s package, from the stage cache ``prepared``."""
+    return child_seconds(tree, SWEEP_RUN, prepared, out, cwd=tree)
 
 
 def imports_old(old: Path, cwd: Path, env=None) -> None:
@@ -101,10 +106,7 @@ def imports_old(old: Path, cwd: Path, env=None) -> None:
 def notebooks_run(tree: Path, out: Path) -> dict:
     """Notebooks 01-05 of ``tree`` at the default config, in order, into ``out``: {name: seconds}."""
     out.mkdir(parents=True)
-    env = {**os.environ, "PYTHONPATH": str(tree)}
-    proc = subprocess.run([sys.executable, "-c", NOTEBOOK_RUN, str(tree), str(out)], cwd=out, env=env,
-                          check=True, capture_output=True, text=True)
-    return json.loads(proc.stdout.strip().splitlines()[-1])
+    return child_seconds(tree, NOTEBOOK_RUN, tree, out, cwd=out)
 
 
 def main(argv=None) -> int:
