@@ -4,6 +4,7 @@
 #   make run      the pipeline alone, seed 0, default config -> runs/seed0/metrics.json
 #   make release  regenerate the student notebooks/ from solutions/ (nbgrader)
 #   make grade    grade a class: make grade SUBMISSIONS=lms_download.zip [SCHEDULER=tcp://host:8786] [REGRADE=1]
+#   make icu      PyICU, which grading needs to find look-alike student ids (make test and make grade run it)
 #   make lab      JupyterLab on the student notebooks (instructors: jupyter lab solutions/)
 #   make bench    speed figures -> benchmarks/wallclock.csv
 #   make meta     re-measure seeds 0-2 and the horizon sweep -> meta.yaml
@@ -14,7 +15,7 @@ STAMP  := $(VENV)/.installed
 
 export PATH := $(abspath $(VENV))/bin:$(PATH)
 
-.PHONY: setup sandbox chapter run test bench meta release grade lab clean
+.PHONY: setup sandbox icu chapter run test bench meta release grade lab clean
 
 setup: $(STAMP)
 
@@ -24,6 +25,33 @@ sandbox:
 	@command -v bwrap >/dev/null 2>&1 || { [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1 \
 	  && (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq bubblewrap >/dev/null) ; } \
 	  || echo "note: bubblewrap is not installed (sudo apt-get install bubblewrap): grading cannot confine student code"
+
+# Look-alike student ids (victim2 and a Cyrillic vіctim2) are found with ICU's Unicode data through
+# PyICU, which compiles against the system's ICU (Debian/Ubuntu packages libicu-dev and pkg-config;
+# the build takes about a minute). Installed apart from `make setup`, so that a laptop without ICU
+# still sets up; without it, grading goes on and warns that look-alike ids were not checked. As root
+# with apt-get (CI), the system packages are installed first. REQUIRE_ICU=1 (.ci/run sets it) makes
+# a failed install an error. The pin is in requirements.txt, as a comment that pip does not read.
+PYICU := $(shell grep -o 'PyICU==[0-9][0-9.]*' requirements.txt)
+APT   := DEBIAN_FRONTEND=noninteractive apt-get -qq -o DPkg::Lock::Timeout=300
+
+icu: setup
+	@$(PY) -c "import icu, sys; sys.exit(icu.VERSION != '$(patsubst PyICU==%,%,$(PYICU))')" 2>/dev/null || { \
+	  need=""; pkg-config --exists icu-i18n 2>/dev/null || need="libicu-dev pkg-config"; \
+	  command -v c++ >/dev/null 2>&1 || need="$$need g++"; \
+	  $(PY) -c "import os, sys, sysconfig; sys.exit(not os.path.exists(sysconfig.get_path('include') + '/Python.h'))" \
+	    || need="$$need python3-dev"; \
+	  if [ -n "$$need" ] && [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "installing $$need with apt-get, to build PyICU"; \
+	    $(APT) install -y $$need >/dev/null 2>&1 || { $(APT) update && $(APT) install -y $$need >/dev/null; }; \
+	  fi; \
+	  echo "building $(PYICU) against the system's ICU (about a minute; log: $(VENV)/pyicu-build.log)"; \
+	  $(PY) -m pip install "$(PYICU)" >$(VENV)/pyicu-build.log 2>&1 \
+	  || { echo "note: $(PYICU) could not be built (see $(VENV)/pyicu-build.log): grading will not check" \
+	            "look-alike student ids. Install ICU's development files (Debian/Ubuntu: sudo apt-get install" \
+	            "libicu-dev pkg-config; macOS: brew install icu4c pkg-config, and add" \
+	            "\$$(brew --prefix)/opt/icu4c/lib/pkgconfig to PKG_CONFIG_PATH), then run make icu"; \
+	       [ -z "$(REQUIRE_ICU)" ]; }; }
 
 $(STAMP): requirements.txt pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -42,7 +70,7 @@ chapter: setup
 run: setup
 	$(PY) -m pusht.dreamer --seed 0 --out runs/seed0
 
-test: setup sandbox
+test: setup sandbox icu
 	$(PY) -m pytest -q
 
 bench: setup
@@ -54,7 +82,7 @@ meta: setup
 release: setup
 	$(PY) scripts/release.py
 
-grade: setup sandbox
+grade: setup sandbox icu
 	@test -n "$(SUBMISSIONS)" || (echo "usage: make grade SUBMISSIONS=path/to/submissions.zip" && exit 2)
 	$(PY) autograde/grade.py "$(SUBMISSIONS)" $(if $(SCHEDULER),--scheduler $(SCHEDULER)) $(if $(REGRADE),--regrade)
 

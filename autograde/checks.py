@@ -6,13 +6,12 @@ module, run by the grader's own process, runs the same probes on the package's r
 implementation and compares. A test earns its points only if every case matches; the feedback
 names the first case that did not, with a hint, but never shows this file.
 
-The static check (``delegations``) reads the student's own cells: a submission that calls the
-package's implementation of the function it was asked to write earns no credit for it.
+The static check (``delegation.py``) follows the graded function through the notebook: one that
+reaches the package's implementation of the function it was asked to write earns no credit for it.
 """
 
 from __future__ import annotations
 
-import ast
 import io
 import math
 from dataclasses import dataclass, field
@@ -205,8 +204,6 @@ DISAGREE = Test("block_disagreement_impl_tests", "06_closing_the_gap", "block_di
 ])
 
 TESTS = {t.test_id: t for t in (REWARD, LAMBDA, LOSSES, DREAM, DISAGREE)}
-GUARD_WORDS = ("pusht.grading", "PUSHT_GRADING", "_PROBING", "__pusht_reference__", "__wrapped__",
-               "ReferenceRefused")
 
 
 def reference_function(test: Test):
@@ -233,10 +230,12 @@ class Verdict:
 
 def judge(test: Test, results, delegation: list[str] | None = None) -> Verdict:
     """The verdict on one test cell from the raw results the kernel saved (or their absence).
-    ``results``: the file's path, or its contents as bytes (None: the kernel saved none)."""
+    ``results``: the file's path, or its contents as bytes (None: the kernel saved none).
+    ``delegation``: where the graded function reaches the package's implementation (the
+    ``definite`` findings of ``delegation.delegations``): no credit, whatever the results."""
     if delegation:
         return Verdict(test.test_id, False,
-                       f"no credit: your notebook uses the package's own `{test.function}` "
+                       f"no credit: your `{test.function}` reaches the package's own implementation "
                        f"({'; '.join(delegation[:3])}). This exercise asks you to write it yourself.")
     try:
         if results is None:
@@ -282,52 +281,3 @@ def judge(test: Test, results, delegation: list[str] | None = None) -> Verdict:
     if passed == n:
         return Verdict(test.test_id, True, f"all {n} checks passed")
     return Verdict(test.test_id, False, f"{passed} of {n} checks passed; first failure: {first}")
-
-
-# --- the static check --------------------------------------------------------------------------------
-def _source(cell) -> str:
-    s = cell.get("source", "")
-    return "".join(s) if isinstance(s, list) else s
-
-
-def delegations(test: Test, cells, release_sources: set[str], locked_ids: set[str] = frozenset()) -> list[str]:
-    """Where the student's own code cells reach for the package's implementation of ``test``.
-
-    Cells identical to a release cell, and locked cells (nbgrader puts the instructor's version
-    back), are skipped. Flags: importing the
-    function from ``pusht``, reading an attribute of that name (``pusht.reward.reward_from_obs``,
-    ``_ev.dream``), naming it in a string (``getattr(m, "reward_from_obs")``), and any reference to
-    the grading harness itself.
-    """
-    name = test.function
-    found = []
-    for idx, cell in enumerate(cells):
-        src = _source(cell)
-        grade_id = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
-        if cell.get("cell_type") != "code" or src in release_sources or grade_id in locked_ids:
-            continue                   # the instructor's cells (locked ones are restored anyway)
-        try:
-            tree = ast.parse(_strip_magics(src))
-        except SyntaxError:
-            continue
-        for node in ast.walk(tree):
-            hit = None
-            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("pusht"):
-                names = {a.name for a in node.names}
-                if name in names or "*" in names or "grading" in names or node.module == "pusht.grading":
-                    hit = f"from {node.module} import {', '.join(sorted(names))}"
-            elif isinstance(node, ast.Import) and any(a.name.startswith("pusht.grading") for a in node.names):
-                hit = "import pusht.grading"
-            elif isinstance(node, ast.Attribute) and node.attr in (name, "grading", "_PROBING", "__wrapped__"):
-                hit = f"`.{node.attr}`"
-            elif isinstance(node, ast.Constant) and isinstance(node.value, str) and (
-                    node.value == name or any(w in node.value for w in GUARD_WORDS)):
-                hit = f"the string {node.value[:40]!r}"
-            if hit:
-                found.append(f"cell {idx + 1}, line {getattr(node, 'lineno', '?')}: {hit}")
-    return found
-
-
-def _strip_magics(src: str) -> str:
-    """IPython magics and shell escapes are not Python: blank them for the parser."""
-    return "\n".join("" if line.lstrip().startswith(("%", "!")) else line for line in src.splitlines())

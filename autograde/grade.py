@@ -12,8 +12,9 @@ Student code is untrusted. What happens, per student:
    outside the course), normalises LMS ids and picks the newest of several uploads;
 2. ``repair``: each notebook is decoded (any common encoding), cleaned of Colab metadata, its
    graded cells matched back to the instructor's (by id or content) and deleted test cells put
-   back; the prediction receipts are checked; the student's own cells are checked for calls to
-   the package's implementation of what they were asked to write (``checks.delegations``);
+   back; the prediction receipts are checked (``receipts``); each graded function is followed
+   through the notebook to see whether it reaches the package's implementation of what it was
+   asked to write (``delegation``);
 3. the student is graded in a private copy of the course (in a temporary folder), by nbgrader,
    in kernels confined by ``sandbox.py`` (bubblewrap: the student's own working folder and
    nothing else of the course, no network, resource and wall-clock limits, a throw-away uid,
@@ -63,8 +64,11 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
+import cellcode  # noqa: E402
 import checks  # noqa: E402
+import delegation  # noqa: E402
 import intake  # noqa: E402
+import receipts  # noqa: E402
 import repair  # noqa: E402
 import sandbox  # noqa: E402
 
@@ -154,24 +158,38 @@ def prepare_student(uploads: dict, release: dict) -> tuple[dict, list[str], dict
         except ValueError as e:
             notes.append(f"{name}: {e}; it scores 0")
             continue
-        if repair.clean_colab(nb):
-            notes.append(f"{name}: saved by Colab; its extra metadata was removed")
-        notes += [f"{name}: {n}" for n in repair.match_cells(nb, release[name])]
-        for g in repair.restore_locked_cells(nb, release[name]):
-            notes.append(f"{name}: the locked test cell '{g}' was missing and was put back; never delete test cells")
-        for ex, stem in EXERCISES.items():
-            if name.startswith(stem):
-                completion[ex] = repair.receipt_verdict(nb, ex)
-        release_sources = {repair.source(c) for c in release[name].cells}
-        locked = {repair.gid(c) for c in release[name].cells
-                  if c.metadata.get("nbgrader", {}).get("locked")}
-        for test in checks.TESTS.values():
-            if name.startswith(test.notebook):
-                found = checks.delegations(test, nb.cells, release_sources, locked)
-                if found:
-                    delegated[test.test_id] = found
+        try:
+            notes += _prepare_notebook(name, nb, release[name], completion, delegated)
+        except Exception as e:       # noqa: BLE001  one odd hand-in never stops the class
+            notes.append(f"{name}: could not be read for grading ({type(e).__name__}: {str(e)[:200]}); it "
+                         f"scores 0. {intake.REDOWNLOAD}")
+            continue
         notebooks[name] = nb
     return notebooks, notes, completion, delegated
+
+
+def _prepare_notebook(name: str, nb, release, completion: dict, delegated: dict) -> list[str]:
+    """Repair one notebook in place, read its receipts and follow its graded functions; returns
+    its notes (``completion`` and ``delegated`` are filled in)."""
+    notes = []
+    if repair.clean_colab(nb):
+        notes.append(f"{name}: saved by Colab; its extra metadata was removed")
+    notes += [f"{name}: {n}" for n in repair.match_cells(nb, release)]
+    for g in repair.restore_locked_cells(nb, release):
+        notes.append(f"{name}: the locked test cell '{g}' was missing and was put back; never delete test cells")
+    for ex, stem in EXERCISES.items():
+        if name.startswith(stem):
+            completion[ex] = receipts.receipt_verdict(nb, ex, release)
+    for test in checks.TESTS.values():
+        if name.startswith(test.notebook):
+            found = delegation.delegations(test, nb.cells, release)
+            if found.definite:
+                delegated[test.test_id] = found.definite
+            elif found.ambiguous:
+                notes.append(f"{name}: for the instructor: the grader cannot tell whether `{test.function}` "
+                             f"reaches the package's own `{test.function}` ({'; '.join(found.ambiguous[:3])}); "
+                             f"its score stands. Read that code; the student need do nothing unless you ask")
+    return notes
 
 
 def course_bundle(course: Path) -> bytes:
@@ -368,7 +386,13 @@ def grade_task(bundle: bytes, student: str, notebooks: dict, timeout: int, confi
     {file name: notebook JSON text}; ``shared`` a folder, or {file name: bytes}, of shared stages)
     and everything goes out in the return value: {"results": {notebook: entry}, "autograded":
     {notebook: JSON text}, "stages": {file name: bytes} (only with ``keep_stages``)}. Nothing is
-    left behind."""
+    left behind.
+
+    The student's uid (confined, as root) is leased for this task alone on this host
+    (``sandbox.allocate_uid``), so other grading runs and Dask workers on the same host never share
+    it; ``index`` does not choose it. It is released when the task ends, whatever still ran as it
+    killed first (``UidLease.sweep``: normally nothing, every sandbox dies with its namespace)."""
+    lease = sandbox.allocate_uid() if confine else sandbox.UidLease()
     work = Path(tempfile.mkdtemp(prefix="pusht-grade-"))
     os.chmod(work, 0o755)
     try:
@@ -381,7 +405,7 @@ def grade_task(bundle: bytes, student: str, notebooks: dict, timeout: int, confi
                     (folder / name).write_bytes(data)
             shared = str(folder)
         args = {"priv": str(priv), "student": student, "timeout": timeout, "confine": confine,
-                "uid": sandbox.student_uid(index) if confine else None, "limits": limits,
+                "uid": lease.uid, "limits": limits,
                 "shared": str(shared) if shared else None, "answer": str(work / "answer.json")}
         proc = subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "--worker", json.dumps(args)],
                                 cwd=priv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
@@ -413,6 +437,8 @@ def grade_task(bundle: bytes, student: str, notebooks: dict, timeout: int, confi
                              if p.is_file() and not p.is_symlink() and CACHE_FILE.match(p.name)}
         return out
     finally:
+        lease.sweep()          # the worker is gone: only a sandbox that escaped its namespace's end is left
+        lease.close()
         shutil.rmtree(work, ignore_errors=True)
 
 
@@ -581,6 +607,86 @@ def default_jobs() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+COURSE_LOCK = ".grading.lock"        # in the course folder while a grading run holds it
+
+
+def _lock_holder(fd: int) -> str:
+    """What the holder of a course lock wrote of itself (it writes just after it locks)."""
+    for _ in range(20):
+        text = os.pread(fd, 200, 0).decode(errors="replace").strip()
+        if text:
+            return text
+        time.sleep(0.05)
+    return "a process that has not said its pid yet"
+
+
+class course_lock:
+    """Hold the course folder ``course`` for one grading run: ``with course_lock(course, log): ...``
+
+    Everything a run writes lives there (gradebook.db, graded.json, feedback/, shared_stages/), so
+    two runs on one folder at once (a regrade started while a batch runs) would corrupt each other.
+    The lock is an ``flock`` on ``course/.grading.lock``, which says who holds it (pid, host, since
+    when); a second run logs that and waits. The kernel drops the lock of a holder that dies; the
+    holder removes the file when it is done, still holding it (a waiter that then gets a removed
+    file sees so and locks the new one)."""
+
+    def __init__(self, course: Path, log=print):
+        self.path, self.log, self.fd = Path(course) / COURSE_LOCK, log, None
+
+    def __enter__(self) -> Path:
+        import fcntl
+        import socket
+
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        while True:
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o600)
+            try:
+                try:
+                    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                except BlockingIOError:
+                    self.log(f"waiting for another grading run of this course to finish: {_lock_holder(fd)} "
+                             f"holds {self.path}")
+                    fcntl.flock(fd, fcntl.LOCK_EX)
+                try:
+                    current = os.stat(self.path, follow_symlinks=False)
+                except FileNotFoundError:
+                    current = None
+                mine = os.fstat(fd)
+                if current is not None and (current.st_dev, current.st_ino) == (mine.st_dev, mine.st_ino):
+                    break
+            except BaseException:
+                os.close(fd)
+                raise
+            os.close(fd)             # the run before removed this file on its way out: lock the new one
+        self.fd = fd
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"pid {os.getpid()} on {socket.gethostname()}, grading since "
+                      f"{time.strftime('%Y-%m-%d %H:%M:%S')}\n".encode(), 0)
+        return self.path
+
+    def __exit__(self, *exc) -> None:
+        self.path.unlink(missing_ok=True)      # before the lock goes: see the class's doc
+        os.close(self.fd)
+        self.fd = None
+
+
+def _one_run_per_course(fn):
+    """``fn`` (grade_class) runs holding its ``course`` argument's folder (``course_lock``)."""
+    import functools
+    import inspect
+
+    signature = inspect.signature(fn)
+
+    @functools.wraps(fn)
+    def run(*args, **kwargs):
+        bound = signature.bind(*args, **kwargs)
+        bound.apply_defaults()
+        with course_lock(Path(bound.arguments["course"]).resolve(), bound.arguments["log"]):
+            return fn(*args, **kwargs)
+    return run
+
+
+@_one_run_per_course
 def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs: int | None = None,
                 log=print, confine: bool | None = None, limits: dict | None = None,
                 progress: bool = True, scheduler=None, share: bool | None = None,
@@ -595,6 +701,9 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
     SHARE_FROM students to grade). ``regrade``: grade again students whose submission, and
     everything else that decides their results, did not change since the last run in ``course``
     (by default their recorded results are reused).
+
+    The whole run holds the course folder (``course_lock``): a second run on the same folder
+    waits for this one, and says whose run it waits for.
     """
     from nbgrader.api import Gradebook
     from tqdm.auto import tqdm
@@ -616,6 +725,9 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
     got = intake.collect(submissions, NOTEBOOKS)
     for line in got.rejected:
         log(f"skipped {line}")
+    for line in got.warnings:            # e.g. look-alike ids not checked: PyICU is missing
+        log(f"WARNING: {line}")
+        warnings.warn(line)
     release = {name: nbformat.read(course / "release" / ASSIGNMENT / name, as_version=4) for name in NOTEBOOKS}
     report = {s: {"notes": list(got.notes.get(s, [])), "completion": {}, "verdicts": {}, "failed": {}}
               for s in got.students}
@@ -871,7 +983,7 @@ def sanitize_feedback_sources(course: Path, report: dict) -> None:
             nb.metadata.pop("widgets", None)
             budget = text_budget = FEEDBACK_NOTEBOOK_CHARS
             for cell in nb.cells:
-                g = repair.gid(cell)
+                g = cellcode.gid(cell)
                 if cell.cell_type == "code" and "### BEGIN HIDDEN TESTS" in cell.source:
                     cell.source = _strip_hidden(cell.source)
                 text_budget = _cap_source(cell, text_budget)

@@ -16,7 +16,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import unicodedata
+from datetime import datetime, timedelta
 import zipfile
 from pathlib import Path
 
@@ -46,7 +48,8 @@ STUDENTS = {
     "forkbomb": ("starts processes until it cannot", 4),
     "network": ("opens a TCP connection to the grader's machine", 4),
     "receiptprint": ("prints forged receipts from a print cell, experiment run first", None),
-    "receiptedit": ("hand-edits the receipt times in the outputs, experiment run first", None),
+    "receiptedit": ("locked again after seeing the experiment (store deleted): the lock receipt is newer than "
+                    "the lock the experiment quotes", None),
     "alreadylocked": ("prints the words 'already locked' to switch the order check off", None),
     "pipelinefirst": ("runs the experiment's functions directly before locking", None),
     # honest but unusual
@@ -250,8 +253,17 @@ def build(executed: Path, canary: str = "/nonexistent") -> dict[str, bytes]:
     nb = json.loads(json.dumps(gap))
     lc = next(c for c in nb["cells"] if _grade_id(c) == "ex1_prediction")
     rc = next(c for c in nb["cells"] if "run_exercise(\"ex1\"" in _src(c))
-    # the real order was: experiment (In [5]) then lock (In [9]); times edited to look right
-    lc["execution_count"], rc["execution_count"] = 9, 5
+    # saw the result, deleted .pusht_predictions.json, locked another choice and ran the lock cell
+    # again: its fresh receipt is later than the experiment, which still quotes the first lock.
+    # (Swapping only the execution counts, as this student once did, is what an honest restart
+    # between the lock and the experiment leaves: receipts.py's module doc.)
+    started = re.search(r"\[experiment started\] ex1 at (\S+)", "".join(
+        "".join(o.get("text", [])) for o in rc["outputs"])).group(1)
+    later = (datetime.fromisoformat(started) + timedelta(minutes=3)).isoformat(timespec="milliseconds")
+    for o in lc["outputs"]:
+        if "text" in o:
+            o["text"] = re.sub(r"\(\w\) at \S+", f"(c) at {later}", "".join(o["text"]), count=1)
+    lc["execution_count"] = max(c.get("execution_count") or 0 for c in nb["cells"]) + 1
     files["receiptedit_04_imagination_gap.ipynb"] = json.dumps(nb).encode()
 
     nb = json.loads(json.dumps(gap))
@@ -262,7 +274,10 @@ def build(executed: Path, canary: str = "/nonexistent") -> dict[str, bytes]:
     nb = json.loads(json.dumps(gap))
     lc = next(c for c in nb["cells"] if _grade_id(c) == "ex1_prediction")
     early = _code_cell("peek = run_seed(cfg.seed)\n")
-    early["execution_count"] = max(1, lc["execution_count"] - 1)
+    early["execution_count"] = lc["execution_count"]        # run just before the lock, in one session
+    for c in nb["cells"]:
+        if isinstance(c.get("execution_count"), int) and c["execution_count"] >= early["execution_count"]:
+            c["execution_count"] += 1
     lc_index = nb["cells"].index(lc)
     nb["cells"].insert(lc_index, early)
     files["pipelinefirst_04_imagination_gap.ipynb"] = json.dumps(nb).encode()

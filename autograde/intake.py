@@ -33,6 +33,13 @@ become the same folder (``Ann Lee`` and ``Ann_Lee``, or ``Ann_Lee`` and ``ann_le
 folder on macOS and Windows) are never merged: both are graded separately, the second one as
 ``Ann_Lee~2``, and both students' notes say so. The same name typed in two Unicode forms (``Chloé``
 composed or decomposed, as macOS writes it) is the same student.
+
+Look-alike ids (see :func:`_note_lookalikes`): ``victim2`` and ``vіctim2`` (a Cyrillic ``і``) are
+two students to the computer and one to the eye. Ids whose Unicode confusable skeletons (UTS #39,
+computed by ICU through PyICU) are equal are graded separately as always, and both students' notes
+name the other id, with the code points of any character outside ASCII spelled out. Without PyICU
+the check cannot run: grading goes on, ``Intake.lookalikes_checked`` is False and
+``Intake.warnings`` says how to enable it.
 """
 
 from __future__ import annotations
@@ -59,6 +66,12 @@ MAX_ID_CHARS = 64                # nbgrader's gradebook holds 128; folders hold 
 MAX_ID_BYTES = 200
 REDOWNLOAD = ("Open the notebook in Jupyter or Colab, use File > Download > Download .ipynb, and "
               "upload the .ipynb file that this saves.")
+LOOKALIKES_NOT_CHECKED = (
+    "look-alike student ids (e.g. 'victim2' and 'v\u0456ctim2', with a Cyrillic i) were NOT checked: "
+    "PyICU cannot be imported ({why}). To check them, install ICU's development files (Debian/Ubuntu: "
+    "sudo apt-get install libicu-dev pkg-config; macOS: brew install icu4c pkg-config, and add "
+    "$(brew --prefix)/opt/icu4c/lib/pkgconfig to PKG_CONFIG_PATH), run `make icu` (it installs the "
+    "PyICU pinned in requirements.txt) and grade again")
 
 # Names of files and folders that operating systems and Jupyter add: ignored, never graded.
 _JUNK = {"__macosx", "thumbs.db", "desktop.ini", "__pycache__"}
@@ -93,11 +106,16 @@ class Intake:
     ``rejected``: one line per file that was graded for nobody: which member and why.
     ``display_names``: student id -> the id exactly as the LMS wrote it (Unicode NFC), for the
         report and for matching grades back to the LMS.
+    ``lookalikes_checked``: whether look-alike ids were looked for (False when PyICU is missing).
+    ``warnings``: lines for the instructor about the whole class download (e.g. that look-alike
+        ids were not checked, and how to enable the check); print them where grading is logged.
     """
     students: dict[str, dict[str, Upload]] = field(default_factory=dict)
     notes: dict[str, list[str]] = field(default_factory=dict)
     rejected: list[str] = field(default_factory=list)
     display_names: dict[str, str] = field(default_factory=dict)
+    lookalikes_checked: bool = False
+    warnings: list[str] = field(default_factory=list)
 
 
 class _Refused(Exception):
@@ -584,7 +602,83 @@ def _assign_ids(originals: set[str], intake: Intake) -> dict[str, str]:
                              f"graded as different students, this one as {sid!r}: check that this is right")
             if len(o) > MAX_ID_CHARS or len(o.encode("utf-8")) > MAX_ID_BYTES:
                 notes.append(f"student id {o!r} is longer than {MAX_ID_CHARS} characters; graded as {sid!r}")
+    _note_lookalikes(ids, intake)
     return ids
+
+
+def _skeleton_function() -> tuple[Callable[[str], set[str]] | None, str]:
+    """(text -> its UTS #39 skeletons, "") or (None, why PyICU cannot be used).
+
+    The skeleton is ICU's (``SpoofChecker.getSkeleton``; its first argument has been ignored since
+    ICU 58, which has one table for all scripts). Two strings that look the same have the same
+    skeleton: ``vіctim2`` (Cyrillic і) and ``victim2``, ``bοb`` (Greek omicron) and ``bob``,
+    ``rn`` and ``m``, ``l``, ``I`` and ``1``. Two steps that ICU 72's getSkeleton leaves out are
+    added: Default_Ignorable characters are removed first (zero-width space, soft hyphen:
+    invisible, so ``vic<U+200B>tim2`` looks like ``victim2``; the skeleton of the current UTS #39
+    removes them too), and the skeleton of the NFKC form is taken as well (fullwidth ``ｖｉｃｔｉｍ２``,
+    superscript ``²``: compatibility variants that the confusables data mostly leaves to NFKC).
+    The import is here, not at the top, so that intake works (and says so) without PyICU.
+    """
+    try:
+        import icu
+    except ImportError as e:
+        return None, f"{type(e).__name__}: {e}"
+    checker = icu.SpoofChecker()
+    ignorable = icu.UnicodeSet("[:Default_Ignorable_Code_Point:]")
+
+    def skeletons(text: str) -> set[str]:
+        visible = "".join(c for c in text if not ignorable.contains(c))
+        return {checker.getSkeleton(0, visible),
+                checker.getSkeleton(0, unicodedata.normalize("NFKC", visible))}
+    return skeletons, ""
+
+
+def _spelled(o: str) -> str:
+    """An id for a note: as written, and when it holds anything beyond printable ASCII, each
+    character again with the code point of every one that is not: 'vіctim2' (v U+0456 c t i m 2)."""
+    if all(" " <= c < "\x7f" for c in o):
+        return repr(o)
+    return f"{o!r} (" + " ".join(c if " " < c < "\x7f" else f"U+{ord(c):04X}" for c in o) + ")"
+
+
+def _note_lookalikes(ids: dict[str, str], intake: Intake) -> None:
+    """Ids that look the same but are different students: a note for each, naming the others.
+
+    Two ids (as the LMS wrote them, NFC) look alike when a skeleton (:func:`_skeleton_function`)
+    of one equals one of the other's, or when their folder-safe forms do (``vіctim 2`` and
+    ``victim_2`` differ by a space in report.csv but are two identical-looking folders). Not
+    noted: ids that become one folder (:func:`_assign_ids` has already said so), and ids that
+    differ by a visible accent (``Zoë`` and ``Zoe``, ``José`` and ``Jose``): UTS #39 keeps
+    accents in the skeleton, and such ids are usually two real students with similar names. Ids
+    only alike through different skeletons are not chained: ``ſam`` (long s) looks like ``fam``
+    and like ``sam``, but ``fam`` and ``sam`` do not look alike. One NFC id is one student
+    already (composed and decomposed ``Chloé``), never two.
+    """
+    skeletons, why = _skeleton_function()
+    if skeletons is None:
+        intake.lookalikes_checked = False
+        intake.warnings.append(LOOKALIKES_NOT_CHECKED.format(why=why))
+        return
+    folder = {o: normalise_student_id(o) for o in ids}
+    by_skeleton: dict[str, set[str]] = {}
+    for o in ids:
+        for k in skeletons(o) | skeletons(folder[o]):
+            by_skeleton.setdefault(k, set()).add(o)
+    alike: dict[str, set[str]] = {}
+    for group in by_skeleton.values():
+        for o in group:
+            alike.setdefault(o, set()).update(
+                x for x in group if _id_key(folder[x]) != _id_key(folder[o]))
+    for o in sorted(ids):
+        others = sorted(alike.get(o, ()))
+        if others:
+            intake.notes.setdefault(ids[o], []).append(
+                f"student id {_spelled(o)} looks like {' and '.join(_spelled(x) for x in others)} "
+                f"(characters that look alike, Unicode UTS #39); they are graded as different students, "
+                f"this one as {ids[o]!r}: check in the LMS that these are different real students and "
+                f"not one posing as another; the id as the LMS wrote it, character by character, "
+                f"decides who is who")
+    intake.lookalikes_checked = True
 
 
 # --- decode --------------------------------------------------------------------------------------

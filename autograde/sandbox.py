@@ -17,6 +17,16 @@ notebook's folder as working directory, and this launcher starts ipykernel insid
   new privileges; rlimits on address space, process count, CPU seconds and file size;
 * a wall clock per notebook: the launcher kills the sandbox when it runs out.
 
+Several grading runs may share a host (two sections at once, a regrade beside a batch, several Dask
+workers), so nothing that names a student's processes is fixed per run. A student's uid is leased
+for the grading task's lifetime (``allocate_uid``) under a lock file of its own in a root-only folder
+that every process on the host uses: no two tasks on one host hold the same uid at once, a task
+that dies frees its uids (the kernel drops a dead process's locks), and a uid some process still runs
+as is not handed out. A sandbox is killed through its PID namespace (``SandboxInit``): bwrap tells
+the host pid of the namespace's init (``--info-fd``), a pidfd holds on to that very process, and
+when it dies the kernel kills every process in the namespace, and nothing outside it. Nothing kills
+"every process of a uid" on the host, but for a uid its task still holds (``UidLease.sweep``).
+
 One sandbox per student, not per notebook, is what the grader starts (``Zygote``): all of a
 student's notebooks run in one folder, so it holds ``pusht.zygote``, a process that has imported
 ipykernel, torch and the package once, and ``launch`` has it fork each notebook's kernel (the same
@@ -34,12 +44,15 @@ to an ordinary kernel, with a loud warning that submissions are NOT confined.
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import secrets
+import select
 import shutil
 import signal
 import socket
+import stat
 import subprocess
 import sys
 import time
@@ -81,9 +94,169 @@ def _probe_uid():
     return 61999 if os.geteuid() == 0 else None
 
 
-def student_uid(index: int) -> int | None:
-    """A throw-away uid per student (root only): rlimits on processes then count that student."""
-    return 61000 + (index % 900) if os.geteuid() == 0 else None
+# --- a throw-away uid per student, leased machine-wide ---------------------------------------------
+STUDENT_UIDS = range(61000, 61900)     # students' uids on this host (61999 is available()'s probe)
+# where the per-uid lock files live: the first of these whose base is writable; every process on the
+# host makes the same choice, so all of them lock the same files
+UID_LOCK_DIRS = (("/run", "pusht-grading/uids"), ("/var/lock", "pusht-grading/uids"), ("/tmp", "pusht-grading-uids"))
+
+
+class UidLease:
+    """A student uid that this process alone holds on this host, until ``close`` or its death.
+
+    The hold is an ``flock`` on the uid's lock file (``allocate_uid``); the kernel drops it when
+    the file is closed or its holder dies, however it dies. The descriptor is close-on-exec and is
+    never passed on, so no worker or sandbox holds it. ``uid`` is None where grading does not run
+    as root (nothing switches uids then)."""
+
+    def __init__(self, uid: int | None = None, fd: int | None = None, path: Path | None = None):
+        self.uid, self.fd, self.path = uid, fd, path
+
+    def close(self) -> None:
+        if self.fd is not None:
+            os.close(self.fd)
+            self.fd = None
+
+    def __del__(self) -> None:      # a lease dropped unclosed frees its uid with it, not at exit
+        try:
+            self.close()
+        except OSError:
+            pass
+
+    def __enter__(self) -> "UidLease":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        return f"UidLease(uid={self.uid}, {'held' if self.fd is not None else 'released'})"
+
+    def sweep(self) -> int:
+        """SIGKILL whatever still runs as this uid; returns how many processes that was.
+
+        Normally nothing does: every sandbox dies with its PID namespace. This is the last resort
+        for one that escaped that (a worker killed while its sandbox was still being set up), and
+        it is allowed only because the lease is held: no other grading run on this host uses the
+        uid meanwhile. Each process is killed through a pidfd, checked to run as the uid after it
+        was opened, so a pid reused in between is never hit."""
+        if self.uid is None or self.fd is None:
+            return 0
+        killed = 0
+        for _ in range(50):
+            found = 0
+            for pid in _pids_running_as(self.uid):
+                try:
+                    pidfd = os.pidfd_open(pid)
+                except OSError:
+                    continue
+                try:
+                    if self.uid in _uids_of(pid):          # read after the pidfd was opened (see above)
+                        signal.pidfd_send_signal(pidfd, signal.SIGKILL)
+                        found += 1
+                except OSError:
+                    pass
+                finally:
+                    os.close(pidfd)
+            if not found:
+                return killed
+            killed += found
+            time.sleep(0.01)
+        return killed
+
+
+def _uids_of(pid: int) -> tuple[int, ...]:
+    """(real, effective, saved, filesystem) uid of a live process, from /proc (a zombie: ())."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return ()
+    if "\nState:\tZ" in status:
+        return ()
+    for line in status.splitlines():
+        if line.startswith("Uid:"):
+            return tuple(int(x) for x in line.split()[1:])
+    return ()
+
+
+def _live_uids() -> set[int]:
+    """Every uid some live process on this host runs as (any of its four), from /proc."""
+    uids: set[int] = set()
+    for pid in filter(str.isdigit, os.listdir("/proc")):
+        uids.update(_uids_of(int(pid)))
+    return uids
+
+
+def _pids_running_as(uid: int) -> list[int]:
+    return [int(p) for p in filter(str.isdigit, os.listdir("/proc")) if uid in _uids_of(int(p))]
+
+
+def _private_dir(path: Path) -> None:
+    """Refuse ``path`` as a lock folder unless it is a real directory of root's that no one else can
+    write (anyone who could would plant or take locks); make it root's alone (0700)."""
+    st = os.lstat(path)
+    if not stat.S_ISDIR(st.st_mode) or st.st_uid != 0 or st.st_mode & 0o022:
+        raise RuntimeError(
+            f"refusing {path} as the folder of the grading uid locks: it must be a directory owned by root "
+            f"that no one else can write (it is {'a directory' if stat.S_ISDIR(st.st_mode) else 'not a directory'}, "
+            f"owner uid {st.st_uid}, mode {stat.S_IMODE(st.st_mode):o}); remove it and grade again")
+    if stat.S_IMODE(st.st_mode) != 0o700:
+        os.chmod(path, 0o700)
+
+
+def uid_lock_dir() -> Path:
+    """The folder of the uid lock files, created if need be: the same for every process on the host
+    (the first of ``UID_LOCK_DIRS`` that can be made), root's alone. Root only."""
+    tried = []
+    for base, rel in UID_LOCK_DIRS:
+        path = Path(base)
+        try:
+            for part in Path(rel).parts:
+                path = path / part
+                try:
+                    os.mkdir(path, 0o700)
+                except FileExistsError:
+                    pass
+                _private_dir(path)
+            return path
+        except OSError as e:           # a base this host does not let us write (RuntimeError is a refusal)
+            tried.append(f"{path}: {e.strerror or e}")
+    raise RuntimeError("no folder for the grading uid locks could be made: " + "; ".join(tried))
+
+
+def allocate_uid() -> UidLease:
+    """Lease a student uid no other grading task on this host holds (root only; else a lease of no
+    uid). The first uid of ``STUDENT_UIDS`` whose lock file this process can lock, and that no live
+    process runs as (a crashed run's leftover), is held until the lease is closed. Raises
+    RuntimeError when every one is taken."""
+    if os.geteuid() != 0:
+        return UidLease()
+    folder = uid_lock_dir()
+    live = None
+    for uid in STUDENT_UIDS:
+        path = folder / f"{uid}.lock"
+        fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o600)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:            # another grading task on this host holds it
+            os.close(fd)
+            continue
+        if live is None:      # once: a new process of an unheld uid can only be a leftover's child
+            live = _live_uids()
+        if uid in live:                    # a leftover of a run that died still runs as it
+            os.close(fd)
+            continue
+        try:                               # who holds it, for whoever looks
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        except OSError:
+            pass
+        return UidLease(uid, fd, path)
+    raise RuntimeError(
+        f"all {len(STUDENT_UIDS)} student uids ({STUDENT_UIDS.start}-{STUDENT_UIDS.stop - 1}) are taken on this "
+        f"host: grading tasks hold them (each holder's pid is in its file in {folder}), or processes still run "
+        f"as them (ps -eo uid,pid,args | awk '$1>={STUDENT_UIDS.start} && $1<{STUDENT_UIDS.stop}'). "
+        f"Wait for the other grading runs, or grade with fewer jobs at once")
 
 
 def _ro_paths() -> list[Path]:
@@ -111,11 +284,15 @@ def _parents(path: Path, made: set) -> list[str]:
 
 
 def bwrap_command(workdir: Path, writable: list[Path], uid: int | None,
-                  readonly: list[Path] = (), limits: dict | None = None, env: dict | None = None) -> list[str]:
-    """The command line (without the program to run) of a sandbox around ``workdir``."""
+                  readonly: list[Path] = (), limits: dict | None = None, env: dict | None = None,
+                  info_fd: int | None = None) -> list[str]:
+    """The command line (without the program to run) of a sandbox around ``workdir``. ``info_fd``:
+    a descriptor bwrap writes the host pid of the sandbox's init to (see ``start_sandbox``)."""
     limits = {**DEFAULT_LIMITS, **(limits or {})}
     cmd = ["bwrap", "--unshare-net", "--unshare-pid", "--unshare-ipc", "--unshare-uts",
            "--unshare-cgroup-try", "--die-with-parent", "--clearenv"]
+    if info_fd is not None:
+        cmd += ["--info-fd", str(info_fd)]
     if os.geteuid() != 0:
         cmd.append("--unshare-user")
     made: set = set()
@@ -197,7 +374,7 @@ def die_with_parent() -> None:
         os.kill(os.getpid(), signal.SIGKILL)
 
 
-def _confinement(s: dict, workdir: Path, readonly: list[Path]) -> list[str]:
+def _confinement(s: dict, workdir: Path, readonly: list[Path], info_fd: int | None = None) -> list[str]:
     """The bwrap command (without the program) of a kernel's sandbox under settings ``s``: the
     student's ``workdir``, the socket folder and the results writable; ``readonly``, the cases and
     the shared stages read-only. Hands those folders to the student's uid first (root only)."""
@@ -212,7 +389,7 @@ def _confinement(s: dict, workdir: Path, readonly: list[Path]) -> list[str]:
         env[SHARED_CACHE_ENV] = s["shared_cache"]
         readonly.append(Path(s["shared_cache"]))
     return bwrap_command(workdir, [Path(s["socket_dir"]), results], uid,
-                         readonly=readonly, limits=s.get("limits"), env=env)
+                         readonly=readonly, limits=s.get("limits"), env=env, info_fd=info_fd)
 
 
 def _hand_over(s: dict, workdir: Path) -> None:
@@ -227,6 +404,130 @@ def _hand_over(s: dict, workdir: Path) -> None:
 
 def _wall(s: dict) -> float:
     return float(s.get("limits", {}).get("wall_seconds", DEFAULT_LIMITS["wall_seconds"]))
+
+
+# --- killing a sandbox: its PID namespace, and nothing else ------------------------------------------
+class SandboxInit:
+    """The init (pid 1) of one sandbox's PID namespace, held as a pidfd.
+
+    Killing it kills the whole sandbox and nothing outside it: when a namespace's init dies, the
+    kernel kills every process in that namespace (ones that left their session or process group,
+    and those of nested namespaces, included) and reaps them before the init's own exit is seen.
+    A pidfd names one process, never a later one given the same pid."""
+
+    def __init__(self, fd: int, pid: int, pidns: int | None, started: int):
+        self.fd, self.pid, self.pidns, self.started = fd, pid, pidns, started
+
+    @classmethod
+    def open(cls, pid, pidns=None, parent: int | None = None, started: int | None = None) -> "SandboxInit | None":
+        """The init whose host pid is ``pid``, checked to be the init of the PID namespace ``pidns``
+        (its inode number, as bwrap reports it), with ``parent`` a child of that process (the bwrap
+        that started it), with ``started`` started then (clock ticks since boot, as ``started``
+        records it); None if that process is gone (and with it its namespace) or ``pid`` is now
+        another process."""
+        if not isinstance(pid, int) or pid <= 0 or (pidns is None and parent is None):
+            return None
+        try:
+            fd = os.pidfd_open(pid)
+        except OSError:
+            return None
+        try:
+            status = Path(f"/proc/{pid}/status").read_text()
+            fields = dict(line.split(":", 1) for line in status.splitlines() if ":" in line)
+            began = int(Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[19])
+            ok = fields.get("NSpid", "").split()[-1:] == ["1"]            # the init of its own namespace
+            if pidns is not None:
+                ok = ok and os.readlink(f"/proc/{pid}/ns/pid") == f"pid:[{pidns}]"
+            if parent is not None:
+                ok = ok and int(fields.get("PPid", "0")) == parent
+            if started is not None:
+                ok = ok and began == started
+            # still alive after those reads: the pid was not reused meanwhile, they were about this process
+            signal.pidfd_send_signal(fd, 0)
+        except (OSError, ValueError, IndexError):
+            ok = False
+        if not ok:
+            os.close(fd)
+            return None
+        return cls(fd, pid, pidns, began)
+
+    def kill(self, wait: float = 10.0) -> None:
+        """SIGKILL the init, and so its namespace; return once it is gone (``wait`` seconds at most)."""
+        if self.fd is None:
+            return
+        try:
+            signal.pidfd_send_signal(self.fd, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        # a pidfd reads as ready once its process has exited; a namespace's init exits only after
+        # every other process of the namespace is dead and reaped
+        _wait_readable(self.fd, wait)
+        self.close()
+
+    def close(self) -> None:
+        if self.fd is not None:
+            os.close(self.fd)
+            self.fd = None
+
+
+def _wait_readable(fd: int, timeout: float) -> bool:
+    poller = select.poll()          # not select.select: it cannot take a descriptor above 1023
+    poller.register(fd, select.POLLIN)
+    return bool(poller.poll(max(timeout, 0) * 1000))
+
+
+def _read_info(fd: int, timeout: float = 30.0) -> dict:
+    """What bwrap wrote on its ``--info-fd`` (it closes it right after cloning the sandbox's init,
+    before the init may go on), or {} if it ended first; closes ``fd``."""
+    data, deadline = b"", time.monotonic() + timeout
+    try:
+        while time.monotonic() < deadline:
+            if not _wait_readable(fd, deadline - time.monotonic()):
+                break
+            chunk = os.read(fd, 4096)
+            if not chunk:
+                break
+            data += chunk
+    finally:
+        os.close(fd)
+    try:
+        info = json.loads(data)
+    except ValueError:
+        return {}
+    return info if isinstance(info, dict) else {}
+
+
+def start_sandbox(build, program: list[str], **popen) -> tuple[subprocess.Popen, SandboxInit | None]:
+    """Start ``build(info_fd) + program`` (``build`` makes a bwrap command line around the given
+    ``--info-fd``) and learn its sandbox's init: (the bwrap process, its ``SandboxInit``, or None if
+    bwrap ended before it made a sandbox). Takes milliseconds: bwrap reports the init as soon as it
+    has cloned it, and holds it until then, so the init is known even if the sandbox is killed while
+    it is still being set up."""
+    r, w = os.pipe()
+    try:
+        proc = subprocess.Popen(build(w) + program, pass_fds=(w,), **popen)
+    except BaseException:
+        os.close(r)
+        raise
+    finally:
+        os.close(w)
+    info = _read_info(r)
+    return proc, SandboxInit.open(info.get("child-pid"), info.get("pid-namespace"), parent=proc.pid)
+
+
+def end_sandbox(proc: subprocess.Popen, init: SandboxInit | None) -> None:
+    """Kill the sandbox ``start_sandbox`` started, everything in it and nothing else, and return once
+    it is all gone: its init first (and so its namespace), then bwrap, which reaps the init and ends
+    on its own (killed first, it would leave the init a zombie for the host's init to reap)."""
+    if init is not None:
+        init.kill()
+        try:
+            proc.wait(timeout=5)
+            return
+        except subprocess.TimeoutExpired:
+            pass
+    proc.kill()
+    proc.wait()
 
 
 def launch(settings_file: str, connection_file: str) -> int:
@@ -245,21 +546,22 @@ def launch(settings_file: str, connection_file: str) -> int:
         code = _launch_via_zygote(s, conn, workdir)
         if code is not None:
             return code
-    cmd = _confinement(s, workdir, [conn])
-    cmd += [sys.executable, "-m", "ipykernel_launcher", "-f", str(conn),
-            "--HistoryManager.hist_file=:memory:"]
-    proc = subprocess.Popen(cmd)
+    proc, init = start_sandbox(lambda fd: _confinement(s, workdir, [conn], info_fd=fd),
+                               [sys.executable, "-m", "ipykernel_launcher", "-f", str(conn),
+                                "--HistoryManager.hist_file=:memory:"])
+
+    def kill():
+        end_sandbox(proc, init)     # its PID namespace: every process inside, nothing outside
 
     def stop(*_):
-        proc.kill()
+        kill()
         sys.exit(1)
 
     signal.signal(signal.SIGTERM, stop)
     try:
         return proc.wait(timeout=_wall(s))
     except subprocess.TimeoutExpired:
-        proc.kill()          # bwrap dies, and with its PID namespace every process inside
-        proc.wait()
+        kill()
         print(WALL_MESSAGE, file=sys.stderr)
         return 137
 
@@ -319,10 +621,7 @@ def _launch_via_zygote(s: dict, conn: Path, workdir: Path) -> int | None:
         try:
             last = replies.readline()
         except (socket.timeout, TimeoutError):
-            try:
-                os.kill(state["pid"], signal.SIGKILL)   # the factory's sandbox, and everything in it
-            except ProcessLookupError:
-                pass
+            _kill_factory(state)
             print(WALL_MESSAGE, file=sys.stderr)
             return 137
         except OSError:
@@ -332,6 +631,21 @@ def _launch_via_zygote(s: dict, conn: Path, workdir: Path) -> int | None:
         return code if code >= 0 else 128 - code
     print("sandbox: the kernel factory stopped while the notebook ran", file=sys.stderr)
     return 1
+
+
+def _kill_factory(state: dict) -> None:
+    """Kill the factory's sandbox, everything in it and nothing else: its PID namespace's init, as the
+    state file names it (pid, namespace and start, checked before it is hit). If that init is gone, so is the
+    sandbox. Only a state file without one (bwrap reported none) falls back to the bwrap process."""
+    if state.get("init") is not None:
+        init = SandboxInit.open(state["init"], state.get("pidns"), started=state.get("init_started"))
+        if init is not None:
+            init.kill()
+        return
+    try:
+        os.kill(state["pid"], signal.SIGKILL)    # --die-with-parent: its sandbox follows it
+    except ProcessLookupError:
+        pass
 
 
 class Zygote:
@@ -348,6 +662,7 @@ class Zygote:
         self.workdir = Path(os.path.realpath(workdir))
         self.state_file = Path(settings["zygote_state"])
         self.proc: subprocess.Popen | None = None
+        self.init: SandboxInit | None = None
         self._sock, self._waited = None, True
 
     def start(self) -> None:
@@ -361,23 +676,27 @@ class Zygote:
         sock = Path(self.s["socket_dir"]) / "zygote"
         conns = Path(self.s["connections_dir"])
         conns.mkdir(mode=0o755, parents=True, exist_ok=True)
-        cmd = _confinement(self.s, self.workdir, [conns])
         # -P: the folder it starts in (the student's) is not put on sys.path for its own imports
-        self.proc = subprocess.Popen(cmd + [sys.executable, "-P", "-m", "pusht.zygote", str(sock)],
-                                     stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
+        self.proc, self.init = start_sandbox(
+            lambda fd: _confinement(self.s, self.workdir, [conns], info_fd=fd),
+            [sys.executable, "-P", "-m", "pusht.zygote", str(sock)],
+            stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
         self._sock, self._waited = sock, False
-        self.proc.stdin.write(token + "\n")
-        self.proc.stdin.close()
+        try:
+            self.proc.stdin.write(token + "\n")
+            self.proc.stdin.close()
+        except OSError:          # it ended at once; ensure() notices, stop() cleans up
+            pass
         tmp = self.state_file.with_suffix(".tmp")
         fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
         with os.fdopen(fd, "w") as f:
-            json.dump({"pid": self.proc.pid, "socket": str(sock), "token": token,
-                       "workdir": str(self.workdir)}, f)
+            json.dump({"pid": self.proc.pid, "socket": str(sock), "token": token, "workdir": str(self.workdir),
+                       "init": self.init and self.init.pid, "pidns": self.init and self.init.pidns,
+                       "init_started": self.init and self.init.started}, f)
         os.replace(tmp, self.state_file)
 
     def _wait_listening(self) -> None:
-        # until bwrap has set its sandbox up, killing it may not take the inside along: wait for the
-        # factory to listen (its socket appears once it has imported everything)
+        # the factory listens once it has imported everything (its socket appears)
         if self.proc is None or self._waited:
             return
         deadline = time.monotonic() + ZYGOTE_WAIT_S
@@ -391,32 +710,13 @@ class Zygote:
         self._wait_listening()
 
     def stop(self) -> None:
-        """Kill the factory's sandbox, with every process in it."""
+        """Kill the factory's sandbox, with every process in it and no other: its PID namespace's
+        init (``SandboxInit``), known from the moment bwrap made it, so a sandbox still being set
+        up dies whole too. Returns once everything in it is gone."""
         self.state_file.unlink(missing_ok=True)
         if self.proc is not None:
-            self._wait_listening()       # one still starting may not die whole (see _wait_listening)
-            self.proc.kill()
-            self.proc.wait()
-            self.proc = None
-        if self.s.get("uid") is not None:      # its own throw-away uid: nothing of it may outlive grading
-            kill_uid(self.s["uid"])
-
-
-def kill_uid(uid: int) -> None:
-    """SIGKILL every process running as ``uid`` (one student's throw-away uid; root only)."""
-    for _ in range(20):
-        found = False
-        for pid in filter(str.isdigit, os.listdir("/proc")):
-            try:      # /proc/PID/status, not the folder's owner: a non-dumpable process's is root
-                status = Path(f"/proc/{pid}/status").read_text()
-                if int(status.split("Uid:")[1].split()[0]) == uid:
-                    found = True
-                    os.kill(int(pid), signal.SIGKILL)
-            except (OSError, IndexError, ValueError):
-                pass
-        if not found:
-            return
-        time.sleep(0.01)
+            end_sandbox(self.proc, self.init)
+        self.proc, self.init = None, None
 
 
 if __name__ == "__main__":

@@ -1,12 +1,13 @@
 """Grading a whole synthetic class: seconds per student, and whether sharing changed any score.
 
-    python benchmarks/bench_class.py [--students 40] [--executed DIR] [--jobs N] [--compare N|all]
-                                     [--scheduler ADDRESS]
+    python benchmarks/bench_class.py [--students 40] [--kinds perfect,colab,...] [--executed DIR]
+                                     [--jobs N] [--compare N|all] [--scheduler ADDRESS]
 
 Builds a class of ``--students`` students by cycling through the synthetic hand-ins of
 ``autograde/synthetic_class.py`` (correct, Colab-saved, wrong, out-of-order prediction, invalid
 prediction, raising, tampered, not a notebook; ``loops``, a cell that never returns, is left out:
-its cost is the per-cell timeout, which an instructor sets), each under its own id and each a
+its cost is the per-cell timeout, which an instructor sets; ``--kinds perfect``: complete correct
+hand-ins only), each under its own id and each a
 complete hand-in of six notebooks (the kind's faulty ones in place of correct ones), and grades it
 once as ``make grade`` would (default parallelism, stages shared, confined where bubblewrap is
 here). Prints the wall time and the seconds per student, amortised. ``--compare`` then grades
@@ -39,15 +40,15 @@ from synthetic_class import build  # noqa: E402
 KINDS = ("perfect", "colab", "wrong", "order", "badpred", "raises", "tamper", "garbage")
 
 
-def class_zip(executed: Path, n: int, dest: Path) -> list[str]:
-    """A zip of ``n`` students cycling through KINDS; returns their ids. Every student hands in all
+def class_zip(executed: Path, n: int, dest: Path, kinds=KINDS) -> list[str]:
+    """A zip of ``n`` students cycling through ``kinds``; returns their ids. Every student hands in all
     six notebooks: the correct ones, with the kind's own notebooks in place of those it replaces
     (the synthetic kinds other than ``perfect`` hand in only the notebooks they get wrong)."""
     members = build(executed)
     ids = []
     with zipfile.ZipFile(dest, "w") as zf:
         for i in range(n):
-            kind = KINDS[i % len(KINDS)]
+            kind = kinds[i % len(kinds)]
             sid = f"{kind}{i:03d}"
             ids.append(sid)
             files = {name[len("perfect_"):]: data for name, data in members.items() if name.startswith("perfect_")}
@@ -74,18 +75,23 @@ def scores(course: Path) -> dict:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--students", type=int, default=40)
+    p.add_argument("--kinds", default=",".join(KINDS), help=f"synthetic kinds to cycle through (default: all of {', '.join(KINDS)})")
     p.add_argument("--executed", type=Path, help="executed solution notebooks (default: run them now, smoke mode)")
     p.add_argument("--jobs", type=int, default=None, help="default: one per core, as make grade")
     p.add_argument("--compare", default="0", help="grade this many students (or 'all') again one at a time, unshared")
     p.add_argument("--scheduler", default=None, help="grade on this Dask scheduler instead of here")
     args = p.parse_args(argv)
+    kinds = tuple(k for k in args.kinds.split(",") if k)
+    unknown = set(kinds) - set(KINDS)
+    if unknown or not kinds:
+        p.error(f"--kinds: unknown {', '.join(sorted(unknown)) or 'none given'}; choose from {', '.join(KINDS)}")
     tmp = Path(tempfile.mkdtemp(prefix="bench-class-"))
     subs = tmp / "class.zip"
-    ids = class_zip(executed_notebooks(args.executed, tmp), args.students, subs)
+    ids = class_zip(executed_notebooks(args.executed, tmp), args.students, subs, kinds)
     jobs = args.jobs or grade.default_jobs()
     print(f"host: {host_description()}, python "
           f"{platform.python_version()}; confined: {sandbox.available()[0]}; {len(ids)} students "
-          f"({', '.join(KINDS)}, cycled); jobs {jobs}", flush=True)
+          f"({', '.join(kinds)}, cycled); jobs {jobs}", flush=True)
     course = tmp / "class"
     t = time.perf_counter()
     grade.grade_class(subs, course, jobs=args.jobs, scheduler=args.scheduler, log=lambda *a: print(*a, flush=True))
@@ -96,7 +102,7 @@ def main(argv=None) -> int:
     n = len(ids) if args.compare == "all" else int(args.compare)
     if n:
         # spread the compared students over the kinds
-        pick = sorted(ids, key=lambda s: (int(s[-3:]) // len(KINDS), s))[:n]
+        pick = sorted(ids, key=lambda s: (int(s[-3:]) // len(kinds), s))[:n]
         mismatched, alone_seconds = [], []
         for sid in pick:
             one = tmp / f"{sid}.zip"

@@ -35,6 +35,16 @@ def executed_notebooks(tmp_path_factory):
     return out, errors
 
 
+@pytest.fixture(scope="session")
+def executed_solutions(executed_notebooks):
+    """The folder of the executed solution notebooks; a test that needs them is skipped where one
+    of them fails on its own (tests/test_notebooks.py says why)."""
+    executed, errors = executed_notebooks
+    if any(errors.values()):
+        pytest.skip("a notebook fails on its own; see test_notebooks")
+    return executed
+
+
 def pytest_report_header(config):
     """Say, at the top of every test run, what tests/test_reproduce.py compares seed 0 against here."""
     try:

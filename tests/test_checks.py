@@ -102,19 +102,6 @@ def test_missing_results_and_delegation_earn_nothing(grading_dir):
     assert not v.passed and "write it yourself" in v.message
 
 
-def test_the_static_check_finds_delegation_but_not_honest_code():
-    def cells(*sources):
-        return [{"cell_type": "code", "source": s, "metadata": {}} for s in sources]
-
-    flagged = ["from pusht.reward import reward_from_obs as r\n", "import pusht\nf = pusht.reward.reward_from_obs\n",
-               "f = getattr(m, 'reward_from_obs')\n", "import pusht.grading\n"]
-    for src in flagged:
-        assert checks.delegations(checks.REWARD, cells(src), set()), src
-    honest = "def reward_from_obs(norm_obs, mean, std):\n    return norm_obs.sum(-1)\nprint('results/ in .npz')\n"
-    assert checks.delegations(checks.REWARD, cells(honest), set()) == []
-
-
-
 def test_verdicts_judged_in_several_threads_at_once_are_the_verdicts_judged_alone(grading_dir):
     # grade_task judges in its own process, and several tasks finish in threads of one process; the
     # reference probes seed torch's global generator, so judgements must not interleave

@@ -21,6 +21,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "autograde"))
 
 import checks  # noqa: E402
+import delegation  # noqa: E402
 import pusht.grading as grading  # noqa: E402
 from pusht.agent import ActorCritic  # noqa: E402
 from pusht.config import make_config  # noqa: E402
@@ -230,7 +231,7 @@ def test_block_disagreement(grading_dir):
 def test_delegating_to_the_package_earns_nothing_and_says_why(grading_dir, test):
     module, name = test.reference.split(":")
     src = f"from {module} import {name} as _theirs\n\ndef {test.function}(*args, **kw):\n    return _theirs(*args, **kw)\n"
-    found = checks.delegations(test, [{"cell_type": "code", "source": src, "metadata": {}}], set())
+    found = delegation.delegations(test, [{"cell_type": "code", "source": src, "metadata": {}}]).definite
     assert found
     v = checks.judge(test, grading_dir / "results" / "none.npz", delegation=found)
     assert not v.passed and "no credit" in v.message and "write it yourself" in v.message

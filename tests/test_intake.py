@@ -250,6 +250,129 @@ def test_ids_that_become_one_folder_are_reported_not_merged(tmp_path):
         assert "same folder" in note and "'Ann_Lee'" in note
 
 
+# Look-alike ids need PyICU (ICU's UTS #39 data). Where it is not installed (a laptop without ICU's
+# development files) these tests are skipped; CI (.ci/run) sets REQUIRE_ICU=1 so they fail instead.
+@pytest.fixture
+def icu():
+    if os.environ.get("REQUIRE_ICU"):
+        import icu
+        return icu
+    return pytest.importorskip("icu", reason="PyICU is not installed: look-alike ids are not checked (make icu)")
+
+
+def lookalike_notes(intake: Intake, sid: str) -> list[str]:
+    return [n for n in intake.notes[sid] if "look alike" in n]
+
+
+def one_notebook_each(*ids: str) -> dict:
+    return {f"{i}_02_reward.ipynb": notebook_bytes(i) for i in ids}
+
+
+def test_lookalike_ids_are_graded_apart_and_both_get_a_note(tmp_path, icu):
+    latin, cyrillic = "victim2", "v\u0456ctim2"           # U+0456 CYRILLIC SMALL LETTER BYELORUSSIAN-UKRAINIAN I
+    intake = intake_of(tmp_path, {f"{latin}_02_reward.ipynb": notebook_bytes("latin"),
+                                  f"{cyrillic}/02_reward.ipynb": notebook_bytes("cyrillic")})
+    assert set(intake.students) == {latin, cyrillic} and intake.lookalikes_checked
+    assert intake.students[cyrillic]["02_reward.ipynb"].member == f"{cyrillic}/02_reward.ipynb"
+    [note] = intake.notes[latin]
+    assert note.startswith(f"student id 'victim2' looks like '{cyrillic}' (v U+0456 c t i m 2) ")
+    [note] = intake.notes[cyrillic]
+    assert note.startswith(f"student id '{cyrillic}' (v U+0456 c t i m 2) looks like 'victim2' ")
+    for sid in intake.students:
+        note = intake.notes[sid][0]
+        assert "look alike" in note and "UTS #39" in note                         # the problem
+        assert "check in the LMS that these are different real students" in note   # what to do
+        assert f"this one as {sid!r}" in note
+    assert intake.warnings == [] and intake.rejected == []
+
+
+# Pairs that ICU's skeletons say look the same: one letter swapped for another script's, the
+# whole id in another script, ASCII look-alikes (UTS #39 counts them: rn/m, l/I/1, O/0),
+# an invisible character, fullwidth forms.
+_SWAPS = [("a", "\u0430"), ("e", "\u0435"), ("o", "\u043e"), ("p", "\u0440"), ("c", "\u0441"),
+          ("x", "\u0445"), ("y", "\u0443"), ("i", "\u0456"), ("j", "\u0458"), ("s", "\u0455"),
+          ("o", "\u03bf"), ("v", "\u03bd"), ("i", "\u03b9"), ("A", "\u0391"), ("B", "\u0392"),
+          ("H", "\u0397"), ("K", "\u039a"), ("T", "\u03a4"), ("h", "\u04bb"), ("g", "\u0261"),
+          ("l", "1"), ("l", "I"), ("O", "0")]
+_LOOKALIKE_PAIRS = (
+    [(f"s{a}42", f"s{b}42") for a, b in _SWAPS]
+    + [(f"{a}{a}n{a}", f"{b}{b}n{b}") for a, b in _SWAPS[:6]]            # every such letter swapped
+    + [("JOSE", "\u0408\u041e\u0405\u0415"),                             # all Cyrillic: ЈОЅЕ
+       ("arnold", "amold"), ("victim2", "vic\u200btim2"), ("victim2", "vic\u00adtim2"),
+       ("victim2", "ｖｉｃｔｉｍ２"), ("Ann Lee", "Ann L\u0435e")]
+    + [(f"k{c}7", f"k{chr(ord(c) + 0xFEE0)}7") for c in "abcdefghijklmnopqrstuvwxyzABCXYZ0123456789"])
+
+
+@pytest.mark.parametrize("first, second", _LOOKALIKE_PAIRS)
+def test_generated_lookalike_pairs_are_noted(tmp_path, icu, first, second):
+    assert first != second
+    intake = intake_of(tmp_path, one_notebook_each(first, second))
+    by_original = {orig: sid for sid, orig in intake.display_names.items()}
+    assert set(by_original) == {first, second} and len(intake.students) == 2
+    for me, other in [(first, second), (second, first)]:
+        [note] = lookalike_notes(intake, by_original[me])
+        assert f"looks like {other!r}" in note
+
+
+@pytest.mark.parametrize("first, second", [
+    ("alice", "alicf"), ("alice", "alice2"), ("s042", "s043"), ("victim2", "victim_2"),
+    # A visible accent is a different name: UTS #39 keeps accents in the skeleton, and Zoë and Zoe
+    # (or José and Jose) are more likely two students with similar names than an impersonation.
+    ("Zoë", "Zoe"), ("José", "Jose"), ("Chloé", "Chloè"),
+    # Two scripts that do not look alike.
+    ("anna", "\u0430\u043d\u043d\u0430"), ("Petr", "\u041f\u0435\u0442\u0440"),
+])
+def test_ids_that_do_not_look_alike_get_no_note(tmp_path, icu, first, second):
+    intake = intake_of(tmp_path, one_notebook_each(first, second))
+    assert len(intake.students) == 2 and intake.lookalikes_checked
+    assert all(notes == [] for notes in intake.notes.values())
+
+
+def test_lookalikes_that_are_one_student_or_one_folder_get_no_lookalike_note(tmp_path, icu):
+    nfc, nfd = unicodedata.normalize("NFC", "Chloé"), unicodedata.normalize("NFD", "Chloé")
+    intake = intake_of(tmp_path, {f"{nfc}_02_reward.ipynb": notebook_bytes(),
+                                  f"{nfd}/05_horizon.ipynb": notebook_bytes(),
+                                  **one_notebook_each("alone", "Ann Lee", "Ann_Lee", "ann_lee")})
+    assert intake.notes[nfc] == [] and intake.notes["alone"] == []      # one student; an id alone
+    ann = [sid for sid in intake.students if sid.casefold().startswith("ann_lee")]
+    assert len(ann) == 3
+    for sid in ann:                                                     # told once, as one folder
+        [note] = intake.notes[sid]
+        assert "same folder" in note
+
+
+def test_three_ids_that_look_alike_each_name_the_other_two(tmp_path, icu):
+    ids = ["victim2", "v\u0456ctim2", "vi\u0441tim2"]                   # Latin, Cyrillic і, Cyrillic с
+    intake = intake_of(tmp_path, one_notebook_each(*ids, "alice"))
+    assert set(intake.students) == {*ids, "alice"} and intake.notes["alice"] == []
+    for me in ids:
+        [note] = lookalike_notes(intake, me)
+        looks_like = note.split(" looks like ", 1)[1].split(" (characters that look alike")[0]
+        assert all(f"{x!r}" in looks_like for x in ids if x != me) and f"{me!r}" not in looks_like
+        assert looks_like.count(" and ") == 1
+    assert "'v\u0456ctim2' (v U+0456 c t i m 2)" in intake.notes["victim2"][0]
+    assert "'vi\u0441tim2' (v i U+0441 t i m 2)" in intake.notes["victim2"][0]
+
+
+def test_folder_safe_ids_that_look_alike_are_noted(tmp_path, icu):
+    # 'vіctim 2' and 'victim_2' differ in report.csv (a space), but their folders look the same.
+    intake = intake_of(tmp_path, one_notebook_each("v\u0456ctim 2", "victim_2"))
+    assert set(intake.students) == {"v\u0456ctim_2", "victim_2"}
+    assert "looks like 'victim_2'" in lookalike_notes(intake, "v\u0456ctim_2")[0]
+    assert "(v U+0456 c t i m U+0020 2)" in lookalike_notes(intake, "victim_2")[0]
+
+
+def test_without_pyicu_intake_works_and_says_lookalikes_were_not_checked(tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "icu", None)      # import icu -> ImportError
+    intake = intake_of(tmp_path, one_notebook_each("victim2", "v\u0456ctim2"))
+    assert set(intake.students) == {"victim2", "v\u0456ctim2"}
+    assert all(notes == [] for notes in intake.notes.values())
+    assert intake.lookalikes_checked is False
+    [warning] = intake.warnings
+    assert "NOT checked" in warning and "PyICU" in warning
+    assert "apt-get install libicu-dev pkg-config" in warning and "make icu" in warning
+
+
 def test_normalised_ids_are_folder_safe_and_nbgrader_safe():
     for raw in ["Ann Lee", "a/b", "a\\b", "C:x", "a[1]?", "x+y,z", " .hidden", "CON", "nul.txt",
                 "-rf", "é" * 100, "tab\there", "a" * 300]:

@@ -25,13 +25,13 @@ import sandbox  # noqa: E402
 pytestmark = pytest.mark.skipif(not sandbox.available()[0], reason="no bubblewrap sandbox here")
 
 
-def start_factory(tmp_path, monkeypatch, index=7):
+def start_factory(tmp_path, monkeypatch, uid):
     root = tmp_path / "run"
     for d in ("sockets", "runtime", "grading/cases", "work"):
         (root / d).mkdir(parents=True)
     os.chmod(tmp_path, 0o755)
     settings = {"socket_dir": str(root / "sockets"), "grading_dir": str(root / "grading"),
-                "uid": sandbox.student_uid(index), "limits": {**sandbox.DEFAULT_LIMITS, "wall_seconds": 40},
+                "uid": uid, "limits": {**sandbox.DEFAULT_LIMITS, "wall_seconds": 40},
                 "shared_cache": None, "zygote_state": str(root / "zygote.json"),
                 "connections_dir": str(root / "connections")}
     monkeypatch.setenv("JUPYTER_RUNTIME_DIR", str(root / "runtime"))
@@ -43,8 +43,15 @@ def start_factory(tmp_path, monkeypatch, index=7):
 
 
 @pytest.fixture()
-def factory(tmp_path, monkeypatch):
-    zygote, root = start_factory(tmp_path, monkeypatch)
+def uid():
+    """A student uid leased for this test as a grading task leases one (None where not root)."""
+    with sandbox.allocate_uid() as lease:
+        yield lease.uid
+
+
+@pytest.fixture()
+def factory(tmp_path, monkeypatch, uid):
+    zygote, root = start_factory(tmp_path, monkeypatch, uid)
     yield zygote, root
     zygote.stop()
 
@@ -90,12 +97,12 @@ def test_kernels_are_forked_fresh_and_leave_nothing_behind(factory):
     assert zygote.proc.poll() is None         # one factory served both
 
 
-def test_a_kernel_keeps_the_graders_thread_setting(tmp_path, monkeypatch):
+def test_a_kernel_keeps_the_graders_thread_setting(tmp_path, monkeypatch, uid):
     # grade.worker sets OMP_NUM_THREADS=1 (one grading task per core); torch is imported in the
     # factory before any kernel exists, so the setting must already be there when the factory starts
     monkeypatch.setenv("OMP_NUM_THREADS", "1")
     monkeypatch.setenv("MKL_NUM_THREADS", "1")
-    zygote, root = start_factory(tmp_path, monkeypatch, index=8)
+    zygote, root = start_factory(tmp_path, monkeypatch, uid)
     try:
         out = run_kernel(root, "import torch\nprint(torch.get_num_threads())")
         assert out.strip() == "1"
@@ -146,14 +153,13 @@ def test_the_wall_clock_stops_a_notebook_and_the_next_one_still_runs(factory):
     assert run_kernel(root, "print(6 * 7)").strip() == "42"
 
 
-def test_a_factory_stopped_while_it_still_starts_leaves_nothing_behind(tmp_path, processes_of):
+def test_a_factory_stopped_while_it_still_starts_leaves_nothing_behind(tmp_path, processes_of, uid):
     """The worker starts the factory before it imports nbgrader (``start`` does not wait for it); a
     worker that fails at once stops a factory still importing torch, and nothing of it may survive."""
     root = tmp_path / "run"
     for d in ("sockets", "runtime", "grading/cases", "work"):
         (root / d).mkdir(parents=True)
     os.chmod(tmp_path, 0o755)
-    uid = sandbox.student_uid(9)
     settings = {"socket_dir": str(root / "sockets"), "grading_dir": str(root / "grading"), "uid": uid,
                 "limits": dict(sandbox.DEFAULT_LIMITS), "shared_cache": None,
                 "zygote_state": str(root / "zygote.json"), "connections_dir": str(root / "connections")}
