@@ -1,6 +1,6 @@
 """Grading is fair to every honest student: the honest class (autograde/honest_class.py), hand-ins
 made the way learners make them and really executed, each earns every point the instructor's own
-solutions earn, completion points included; graded as one class and as two sections graded at the
+solutions earn, completion points included; graded as one class, and as two grading runs at the
 same time on this machine (two `grade.py` processes), the scores are the same.
 """
 
@@ -11,6 +11,7 @@ import unicodedata
 import zipfile
 from pathlib import Path
 
+import nbformat
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -87,32 +88,42 @@ def test_look_alike_ids_are_noted_for_both_students(honest):
     assert "looks like" not in rows["solutions"]
 
 
-def test_two_sections_graded_at_once_score_as_graded_alone(honest):
-    """Two `grade.py` runs on one machine at the same time (two sections of the class, each in its
-    own course folder): every student's scores are those of grading the class alone. Before the
-    grading runs were isolated, one run's clean-up killed the other's kernels (the same student
-    uids in both runs, killed host-wide)."""
+SLOW_CHECK = "import time\ntime.sleep(25)   # my own long check, added last and never run\n"
+
+
+def test_two_runs_graded_at_once_score_as_graded_alone(honest):
+    """Two `grade.py` runs on one machine at the same time, each in its own course folder: a regrade
+    of one student, and the rest of the class. The one student is the solutions with a slow check
+    of the learner's own (a cell that sleeps 25 s before the reward test): while its kernel waits,
+    the other run's tasks start and end, with their clean-ups. Every student scores what grading
+    alone gives. Before grading runs were isolated, both runs gave task i the uid 61000 + i and a
+    task's clean-up killed every process of its uid on the host, so the other run's first clean-up
+    killed this student's sleeping kernel."""
     course, _, subs, tmp = honest
     alone = gradebook(course)
-    order = sorted(honest_class.STUDENTS)
-    sections = {}
-    for k, part in enumerate(("a", "b")):
-        sections[part] = tmp / f"section_{part}.zip"
+    parts = {"one": tmp / "one.zip", "rest": tmp / "rest.zip"}
+    with zipfile.ZipFile(subs) as src, zipfile.ZipFile(parts["one"], "w") as one, \
+            zipfile.ZipFile(parts["rest"], "w") as rest:
+        for m in src.namelist():
+            if not m.startswith("solutions_"):
+                rest.writestr(m, src.read(m))
+                continue
+            nb = nbformat.reads(src.read(m).decode(), as_version=4)
+            if m.endswith("02_reward.ipynb"):
+                tests = next(i for i, c in enumerate(nb.cells) if c.metadata.get("nbgrader", {}).get("grade_id")
+                             == "reward_impl_tests")
+                nb.cells.insert(tests, nbformat.v4.new_code_cell(SLOW_CHECK))
+            one.writestr(m.replace("solutions_", "slow_", 1), nbformat.writes(nb))
+    procs = []
+    for part, z in parts.items():
         (tmp / f"course_{part}").mkdir()
-        with zipfile.ZipFile(subs) as src, zipfile.ZipFile(sections[part], "w") as dst:
-            for m in src.namelist():
-                student = next(s for s in order if m.startswith(f"{s}_"))
-                if order.index(student) % 2 == k:
-                    dst.writestr(m, src.read(m))
-    procs = [subprocess.Popen([sys.executable, str(ROOT / "autograde" / "grade.py"), str(z),
-                               "--course", str(tmp / f"course_{part}"), "--timeout", str(TIMEOUT)],
-                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-             for part, z in sections.items()]
+        procs.append(subprocess.Popen([sys.executable, str(ROOT / "autograde" / "grade.py"), str(z), "--course",
+                                       str(tmp / f"course_{part}"), "--timeout", str(TIMEOUT)],
+                                      stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True))
     outs = [p.communicate(timeout=1800)[0] for p in procs]
     assert all(p.returncode == 0 for p in procs), [o[-3000:] for o in outs]
-    together = {}
-    for part in sections:
-        together.update(gradebook(tmp / f"course_{part}"))
-    assert sorted(together) == sorted(alone)
-    for student in alone:
-        assert automatic(together[student]) == automatic(alone[student]), student
+    together = gradebook(tmp / "course_rest") | gradebook(tmp / "course_one")
+    assert sorted(together) == sorted([s for s in alone if s != "solutions"] + ["slow"])
+    for student in together:
+        expected = alone["solutions" if student == "slow" else student]
+        assert automatic(together[student]) == automatic(expected), (student, outs[0][-2000:])
