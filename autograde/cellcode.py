@@ -19,12 +19,18 @@ from functools import lru_cache
 PYTHON_MAGICS = {"time", "timeit", "capture", "prun"}
 
 
+def text(value) -> str:
+    """A saved text field (a cell's source, an output's text) as one string, whatever the saving
+    program or a hand edit put there: a string, a list of strings, or something else."""
+    if isinstance(value, list):
+        return "".join(v if isinstance(v, str) else str(v) for v in value)
+    return value if isinstance(value, str) else "" if value is None else str(value)
+
+
 def source(cell) -> str:
     """A cell's text; "" for anything a hand-in holds there that is not text."""
     s = cell.get("source", "") if isinstance(cell, dict) else ""
-    if isinstance(s, list) and all(isinstance(x, str) for x in s):
-        return "".join(s)
-    return s if isinstance(s, str) else ""
+    return text(s) if isinstance(s, (str, list)) else ""
 
 
 def gid(cell) -> str | None:

@@ -49,6 +49,7 @@ import inspect
 from dataclasses import dataclass, field
 
 import cellcode
+import checks
 
 HARNESS_WORDS = ("pusht.grading", "PUSHT_GRADING", "_PROBING", "__pusht_reference__", "ReferenceRefused")
 # Called by bare name: Python's own ways of reaching a name at run time.
@@ -591,34 +592,27 @@ def _func_name(f) -> str | None:
     return None
 
 
-def _writes_by_hand(tree) -> str | None:
-    """Top-level code that rebinds names or attributes in ways a reading cannot follow."""
+def _hand_writes(tree) -> list[tuple[str, bool]]:
+    """What a cell writes by hand: (what, whether it can rebind names unseen) for each attribute or
+    item it assigns or deletes and each ``setattr``/``delattr``/``exec`` it calls. Rebinding names
+    unseen: writing into ``globals()``, setting an attribute of ``__main__``, ``builtins`` or
+    ``sys``, and those calls."""
+    out = []
     for node in ast.walk(tree):
         if isinstance(node, (ast.Assign, ast.AugAssign, ast.AnnAssign, ast.Delete)):
             for t in (node.targets if isinstance(node, (ast.Assign, ast.Delete)) else [node.target]):
-                if isinstance(t, ast.Subscript) and _func_name(getattr(t.value, "func", None)) in ("globals", "vars"):
-                    return "writes into `globals()`"
-                if isinstance(t, ast.Attribute):
+                if isinstance(t, ast.Subscript):
+                    into_globals = _func_name(getattr(t.value, "func", None)) in ("globals", "vars")
+                    out.append(("writes into `globals()`" if into_globals else "sets an item", into_globals))
+                elif isinstance(t, ast.Attribute):
                     root = t
                     while isinstance(root, ast.Attribute):
                         root = root.value
-                    if isinstance(root, ast.Name) and root.id in ("__main__", "builtins", "__builtins__", "sys"):
-                        return f"sets `{ast.unparse(t)}`"
-        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in ("setattr", "exec", "delattr"):
-            return f"calls `{node.func.id}`"
-    return None
-
-
-def _attribute_writes(tree) -> bool:
-    """Does a cell assign or delete an attribute, or call setattr/exec (a patch by hand)?"""
-    for node in ast.walk(tree):
-        if isinstance(node, (ast.Assign, ast.AugAssign, ast.AnnAssign, ast.Delete)):
-            for t in (node.targets if isinstance(node, (ast.Assign, ast.Delete)) else [node.target]):
-                if isinstance(t, (ast.Attribute, ast.Subscript)):
-                    return True
-        if isinstance(node, ast.Call) and _func_name(node.func) in ("setattr", "exec", "delattr", "__setattr__"):
-            return True
-    return False
+                    unseen = isinstance(root, ast.Name) and root.id in ("__main__", "builtins", "__builtins__", "sys")
+                    out.append((f"sets `{ast.unparse(t)}`", unseen))
+        elif isinstance(node, ast.Call) and _func_name(node.func) in ("setattr", "exec", "delattr", "__setattr__"):
+            out.append((f"calls `{_func_name(node.func)}`", isinstance(node.func, ast.Name)))
+    return out
 
 
 # --- the check ----------------------------------------------------------------------------------------
@@ -629,8 +623,7 @@ def delegations(test, cells, release=None, reference=None) -> Findings:
     release version of the notebook, and not one of its locked cells, which nbgrader puts back).
     Never raises on a hand-in: what cannot be read is reported as ambiguous."""
     if reference is None:
-        module, name = test.reference.split(":")
-        reference = getattr(importlib.import_module(module), name)
+        reference = checks.reference_function(test)
     try:
         return _delegations(test, list(cells), release, reference)
     except (_TooComplex, RecursionError, MemoryError):
@@ -676,7 +669,7 @@ def _delegations(test, cells, release, reference) -> Findings:
         tree = trees.get(i)
         if tree is None or i >= stop:
             continue
-        why = _writes_by_hand(tree)
+        why = next((what for what, unseen in _hand_writes(tree) if unseen), None)
         if why:
             reach.findings.ambiguous.append(f"cell {i + 1}: {why}, which can rebind names without the grader "
                                             f"seeing it")
@@ -691,7 +684,7 @@ def _delegations(test, cells, release, reference) -> Findings:
                 harness_cells.setdefault(i, (getattr(node, "lineno", "?"), hit))
     for i, (line, hit) in harness_cells.items():
         where = f"{_where(i, line)}: a reference to the grading harness (`{hit}`)"
-        if _attribute_writes(trees[i]) or any(c == i for c, _, _ in reach.harness):
+        if _hand_writes(trees[i]) or any(c == i for c, _, _ in reach.harness):
             reach.findings.definite.append(where)
         else:
             reach.findings.ambiguous.append(where + " that changes nothing the grader can see")

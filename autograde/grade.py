@@ -377,8 +377,8 @@ def _last_error(text: str) -> str:
 CACHE_FILE = re.compile(r"^(expert_.*\.npz|(wm|agent|loop)_[0-9a-f]{16}\.pt)$")   # pusht's stage cache files
 
 
-def grade_task(bundle: bytes, student: str, notebooks: dict, timeout: int, confine: bool, index: int,
-               limits: dict, shared=None, keep_stages: bool = False) -> dict:
+def grade_task(bundle: bytes, student: str, notebooks: dict, timeout: int, confine: bool, limits: dict,
+               shared=None, keep_stages: bool = False) -> dict:
     """Grade some notebooks of one student, start to end, in a temporary private course.
 
     Self-contained, so that it runs the same in a thread here or on a Dask worker on another
@@ -390,7 +390,7 @@ def grade_task(bundle: bytes, student: str, notebooks: dict, timeout: int, confi
 
     The student's uid (confined, as root) is leased for this task alone on this host
     (``sandbox.allocate_uid``), so other grading runs and Dask workers on the same host never share
-    it; ``index`` does not choose it. It is released when the task ends, whatever still ran as it
+    it. It is released when the task ends, whatever still ran as it
     killed first (``UidLease.sweep``: normally nothing, every sandbox dies with its namespace)."""
     lease = sandbox.allocate_uid() if confine else sandbox.UidLease()
     work = Path(tempfile.mkdtemp(prefix="pusht-grade-"))
@@ -476,8 +476,8 @@ def shared_stages(bundle: bytes, course: Path, jobs: int, scheduler, timeout: in
                 failed.append(f"{name} ({entry['error']})")
             failed.extend(f"{name}: {t}" for t, v in entry["verdicts"].items() if not v["passed"])
 
-    def submit_args(i, task):
-        return (bundle, REFERENCE, {n: notebooks[n] for n in task[1]}, timeout, confine, i, limits, None, True)
+    def submit_args(task):
+        return (bundle, REFERENCE, {n: notebooks[n] for n in task[1]}, timeout, confine, limits, None, True)
 
     t = time.perf_counter()
     tasks = _split([REFERENCE], {REFERENCE: notebooks}, jobs if scheduler is None else 2)
@@ -527,7 +527,7 @@ def _split(students: list, notebooks: dict, jobs: int) -> list:
 
 def run_tasks(tasks: list, jobs: int, scheduler, submit_args, on_done, log=print) -> None:
     """Run grading tasks on the Dask cluster ``scheduler`` if given, else here, ``jobs`` at a time.
-    ``submit_args(i, task)`` gives grade_task's arguments; ``on_done(task, result)`` takes each result
+    ``submit_args(task)`` gives grade_task's arguments; ``on_done(task, result)`` takes each result
     (in this process, in the order they finish)."""
     if scheduler is not None:
         run_dask(tasks, scheduler, submit_args, on_done, log=log)
@@ -540,7 +540,7 @@ def run_local(tasks: list, jobs: int, submit_args, on_done) -> None:
     from concurrent.futures import as_completed
 
     with ThreadPoolExecutor(jobs) as pool:
-        futures = {pool.submit(grade_task, *submit_args(i, task)): task for i, task in enumerate(tasks)}
+        futures = {pool.submit(grade_task, *submit_args(task)): task for task in tasks}
         for f in as_completed(futures):
             on_done(futures[f], f.result())
 
@@ -571,8 +571,8 @@ def run_dask(tasks: list, scheduler, submit_args, on_done, log=print) -> None:
                 return scattered[id(x)]
             return x
         for i, task in enumerate(tasks):
-            args = submit_args(i, task)
-            args = (once(args[0]),) + args[1:7] + (once(args[7]),) + args[8:]
+            args = submit_args(task)
+            args = (once(args[0]),) + args[1:6] + (once(args[6]),) + args[7:]
             f = client.submit(grade_task, *args, key=f"grade-{task[0]}-{i}-{hashlib.sha1(repr(task).encode()).hexdigest()[:8]}",
                               retries=2, pure=False)
             futures[f] = task
@@ -768,9 +768,9 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
     if share and todo:
         shared = shared_stages(bundle, course, jobs, scheduler, log=log, **settings)
 
-    def submit_args(i, task):
+    def submit_args(task):
         s, names = task
-        return (bundle, s, {n: nbformat.writes(prepared[s][n]) for n in names}, timeout, confine, i, limits, shared)
+        return (bundle, s, {n: nbformat.writes(prepared[s][n]) for n in names}, timeout, confine, limits, shared)
 
     left = {}
     tasks = _split(todo, prepared, jobs if scheduler is None else 1)

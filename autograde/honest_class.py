@@ -22,7 +22,6 @@ import json
 import os
 import re
 import tempfile
-import unicodedata
 import uuid
 import zipfile
 from pathlib import Path
@@ -403,11 +402,6 @@ def write_zip(out: Path, executed: Path, work: Path, log=print) -> Path:
         for name, data in sorted(build(executed, work, log).items()):
             zf.writestr(name, data)
     return out
-
-
-def student_ids() -> list[str]:
-    """The ids as the grader will know them (Unicode NFC)."""
-    return sorted(unicodedata.normalize("NFC", s) for s in STUDENTS)
 
 
 def main(argv=None):

@@ -61,13 +61,6 @@ EXPERIMENTS = {
 }
 
 
-def _text(x) -> str:
-    """Saved output text as a string, whatever the saving program (or a hand edit) put there."""
-    if isinstance(x, list):
-        return "".join(v if isinstance(v, str) else str(v) for v in x)
-    return x if isinstance(x, str) else "" if x is None else str(x)
-
-
 def _outputs(cell) -> list:
     outs = cell.get("outputs") if isinstance(cell, dict) else None
     return [o for o in outs if isinstance(o, dict)] if isinstance(outs, list) else []
@@ -76,7 +69,7 @@ def _outputs(cell) -> list:
 def _stdout(cell) -> list[str]:
     """The cell's printed lines, consecutive stream outputs joined first: where the kernel (or the
     front-end that saved it) cut the text into messages must not cut a receipt in two."""
-    text = [_text(o.get("text")) for o in _outputs(cell)
+    text = [cellcode.text(o.get("text")) for o in _outputs(cell)
             if o.get("output_type") == "stream" and o.get("name") == "stdout"]
     return "".join(text).splitlines()
 
@@ -84,12 +77,12 @@ def _stdout(cell) -> list[str]:
 def _all_output_text(cell) -> str:
     parts = []
     for o in _outputs(cell):
-        parts.append(_text(o.get("text")))
+        parts.append(cellcode.text(o.get("text")))
         data = o.get("data")
         if isinstance(data, dict):
-            parts += [_text(v) for v in data.values()]
+            parts += [cellcode.text(v) for v in data.values()]
         tb = o.get("traceback")
-        parts += [_text(o.get("evalue"))] + ([_text(t) for t in tb] if isinstance(tb, list) else [])
+        parts += [cellcode.text(o.get("evalue"))] + ([cellcode.text(t) for t in tb] if isinstance(tb, list) else [])
     return "\n".join(parts)
 
 

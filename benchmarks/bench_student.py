@@ -60,7 +60,7 @@ def graded_once(course: Path, zip_path: Path, student: str, timing_file: Path) -
     grade.subprocess.Popen = Timed
     try:
         t = time.perf_counter()
-        out = grade.grade_task(grade.course_bundle(course), student, notebooks, 120, sandbox.available()[0], 0,
+        out = grade.grade_task(grade.course_bundle(course), student, notebooks, 120, sandbox.available()[0],
                                dict(sandbox.DEFAULT_LIMITS), str(course / grade.SHARED_DIR))
         total = time.perf_counter() - t
     finally:
