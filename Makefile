@@ -5,6 +5,7 @@
 #   make release  regenerate the student notebooks/ from solutions/ (nbgrader)
 #   make grade    grade a class: make grade SUBMISSIONS=lms_download.zip [SCHEDULER=tcp://host:8786] [REGRADE=1]
 #   make icu      PyICU, which grading needs to find look-alike student ids (make test and make grade run it)
+#   make browser  Chromium and Playwright, for the feedback pages' browser test (make test runs it)
 #   make lab      JupyterLab on the student notebooks (instructors: jupyter lab solutions/)
 #   make bench    speed figures -> benchmarks/wallclock.csv
 #   make meta     re-measure seeds 0-2 and the horizon sweep -> meta.yaml
@@ -15,7 +16,7 @@ STAMP  := $(VENV)/.installed
 
 export PATH := $(abspath $(VENV))/bin:$(PATH)
 
-.PHONY: setup sandbox icu chapter run test bench meta release grade lab clean
+.PHONY: setup sandbox icu browser chapter run test bench meta release grade lab clean
 
 setup: $(STAMP)
 
@@ -53,6 +54,26 @@ icu: setup
 	            "\$$(brew --prefix)/opt/icu4c/lib/pkgconfig to PKG_CONFIG_PATH), then run make icu"; \
 	       [ -z "$(REQUIRE_ICU)" ]; }; }
 
+# The feedback pages' browser test (tests/test_feedback_browser.py) opens a hostile notebook's pages
+# in headless Chromium through Playwright: Debian's `chromium` package, installed here when we are
+# root with apt-get (about 30 s and 400 MB with its libraries), and the Python package playwright
+# (a 50 MB wheel, 170 MB installed, that `make setup` and a course laptop never need: its pin is in
+# requirements.txt as a comment that pip does not read, and this target installs it). Playwright is
+# pointed at /usr/bin/chromium and never downloads a browser of its own. Without either the test is
+# skipped with a note; REQUIRE_BROWSER=1 (.ci/run sets it) makes a failed install an error.
+PLAYWRIGHT := $(shell grep -o 'playwright==[0-9][0-9.]*' requirements.txt)
+
+browser: setup
+	@[ -x /usr/bin/chromium ] || { [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1 \
+	  && echo "installing chromium with apt-get, for the feedback pages' browser test" \
+	  && { $(APT) install -y chromium >/dev/null 2>&1 || { $(APT) update && $(APT) install -y chromium >/dev/null; }; }; } \
+	  || { echo "note: chromium is not installed (sudo apt-get install chromium): the feedback pages'" \
+	            "browser test is skipped"; [ -z "$(REQUIRE_BROWSER)" ]; }
+	@$(PY) -c "import importlib.metadata as m, sys; sys.exit(m.version('playwright') != '$(patsubst playwright==%,%,$(PLAYWRIGHT))')" \
+	    2>/dev/null || $(PY) -m pip install "$(PLAYWRIGHT)" >$(VENV)/playwright-install.log 2>&1 \
+	  || { echo "note: $(PLAYWRIGHT) could not be installed (see $(VENV)/playwright-install.log): the" \
+	            "feedback pages' browser test is skipped"; [ -z "$(REQUIRE_BROWSER)" ]; }
+
 $(STAMP): requirements.txt pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet -r requirements.txt
@@ -70,7 +91,7 @@ chapter: setup
 run: setup
 	$(PY) -m pusht.dreamer --seed 0 --out runs/seed0
 
-test: setup sandbox icu
+test: setup sandbox icu browser
 	$(PY) -m pytest -q
 
 bench: setup

@@ -1,18 +1,19 @@
 """The hidden tests, judged outside the student's kernel.
 
-Each graded test cell ends, while grading, in ``pusht.grading.submit(TEST_ID, student_function)``:
-the kernel runs the probe cases below on the student's function and saves the raw numbers. This
-module, run by the grader's own process, runs the same probes on the package's reference
-implementation and compares. A test earns its points only if every case matches; the feedback
-names the first case that did not, with a hint, but never shows this file.
+Each hidden test is a list of probe cases (``pusht.grading.probe`` runs them). The grader runs
+them on the student's function in its probe process (``probe.py``: the function defined from the
+hand-in's cells, in a sandbox where the package's own implementations are absent) and on the
+package's implementation here, and compares the numbers. A test earns its points only if every
+case matches; the feedback names the first case that did not, with a hint, but never shows this
+file.
 
 The static check (``delegation.py``) follows the graded function through the notebook: one that
-reaches the package's implementation of the function it was asked to write earns no credit for it.
+reaches the package's implementation of the function it was asked to write earns no credit for it,
+with a message that says where.
 """
 
 from __future__ import annotations
 
-import io
 import math
 from dataclasses import dataclass, field
 
@@ -218,7 +219,20 @@ def reference_results(test: Test, fresh: int) -> list[dict]:
     from pusht.grading import probe
 
     fn = reference_function(test)
-    return [probe(case.spec, fn, fresh) for case in test.cases]
+    helpers = {"lambda_return": reference_function(LAMBDA)}
+    return [probe(case.spec, fn, fresh, helpers) for case in test.cases]
+
+
+def probe_in_process(test: Test, fn, fresh: int = 12345) -> dict:
+    """``fn``'s raw results on ``test``'s cases, run in THIS process, in the form the probe server
+    gives (``probe.ProbeServer.run``): for tests of the judge and of the package's answers, never
+    for a student's code."""
+    from pusht.grading import decode_results, encode_results, run_probes
+
+    helpers = {"lambda_return": reference_function(LAMBDA)}
+    setup, results = decode_results(encode_results(run_probes([c.spec for c in test.cases], fn, fresh, helpers)),
+                                    len(test.cases))
+    return {"fresh": fresh, "status": "ok", "setup": setup, "results": results}
 
 
 @dataclass
@@ -228,44 +242,40 @@ class Verdict:
     message: str
 
 
-def judge(test: Test, results, delegation: list[str] | None = None) -> Verdict:
-    """The verdict on one test cell from the raw results the kernel saved (or their absence).
-    ``results``: the file's path, or its contents as bytes (None: the kernel saved none).
-    ``delegation``: where the graded function reaches the package's implementation (the
-    ``definite`` findings of ``delegation.delegations``): no credit, whatever the results."""
+def judge(test: Test, probed: dict | None, delegation: list[str] | None = None) -> Verdict:
+    """The verdict on one test cell from the raw results the probe process returned
+    (``probe.ProbeServer.run``; None: the test was never probed). ``delegation``: where the graded
+    function reaches the package's implementation (the ``definite`` findings of
+    ``delegation.delegations``): no credit, whatever the results."""
     if delegation:
         return Verdict(test.test_id, False,
                        f"no credit: your `{test.function}` reaches the package's own implementation "
                        f"({'; '.join(delegation[:3])}). This exercise asks you to write it yourself.")
-    try:
-        if results is None:
-            raise FileNotFoundError
-        source = io.BytesIO(results) if isinstance(results, (bytes, bytearray)) else results
-        with np.load(source, allow_pickle=False) as z:
-            saved = {k: z[k] for k in z.files}
-    except FileNotFoundError:
-        return Verdict(test.test_id, False,
-                       "the test cell did not reach its checks (an earlier error, a timeout, or the "
-                       "kernel stopped before it): see the outputs above")
-    except Exception as e:
-        return Verdict(test.test_id, False, f"the recorded results are unreadable ({type(e).__name__})")
-    try:
-        fresh = int(saved["fresh"])
-        if not 0 <= fresh < 2 ** 24:
-            raise ValueError
-    except (KeyError, ValueError, TypeError):
-        return Verdict(test.test_id, False, "the recorded results are incomplete")
-    refs = reference_results(test, fresh)
+    if probed is None:
+        return Verdict(test.test_id, False, "this test was not checked: the notebook holding it was not graded")
+    setup = probed.get("setup") or []
+    defining = f" (defining it: {setup[0][:200]})" if setup else ""
+    status = probed.get("status")
+    if status == "timeout":
+        return Verdict(test.test_id, False, f"your `{test.function}` did not finish the checks in time{defining}")
+    if status == "toolarge":
+        return Verdict(test.test_id, False, f"your `{test.function}` returned far more numbers than the checks need")
+    if status != "ok" or probed.get("results") is None:
+        return Verdict(test.test_id, False, f"your `{test.function}` could not be checked: "
+                                            f"{(setup[0] if setup else status)[:300]}")
+    saved = probed["results"]
+    refs = reference_results(test, int(probed["fresh"]))
     passed = 0
     first = None
     for i, (case, ref) in enumerate(zip(test.cases, refs)):
         ok, why = True, ""
-        if f"c{i}.error" in saved:
-            ok, why = False, f"your function raised {str(saved[f'c{i}.error'])[:200]}"
+        got_case = saved[i]
+        if isinstance(got_case, str):
+            ok, why = False, f"your function raised {got_case[:200]}"
         else:
             for key, want in ref.items():
-                got = saved.get(f"c{i}.{key}")
-                if got is None or got.dtype.kind not in "fiu":
+                got = got_case.get(key)
+                if got is None:
                     ok, why = False, f"no numeric result for {key}"
                     break
                 if got.shape != want.shape:
@@ -280,4 +290,4 @@ def judge(test: Test, results, delegation: list[str] | None = None) -> Verdict:
     n = len(test.cases)
     if passed == n:
         return Verdict(test.test_id, True, f"all {n} checks passed")
-    return Verdict(test.test_id, False, f"{passed} of {n} checks passed; first failure: {first}")
+    return Verdict(test.test_id, False, f"{passed} of {n} checks passed; first failure: {first}{defining}")

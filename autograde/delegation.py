@@ -29,15 +29,15 @@ business. So the question is asked of the graded function, not of the notebook:
    a value computed at top level by calling the package (a tolerance, a test input) is not a
    reference to it.
 
-References to the grading harness itself (``pusht.grading``, its switch, the guard's marks) in
+References to the grading harness itself (``pusht.grading``, its old switch, the marks) in
 the learner's own cells are findings when the cell also writes something by hand (an attribute,
 ``setattr``, ``exec``) or the graded function reaches them, and ambiguous otherwise (a curious
 ``help(pusht.grading)``).
 
 What this cannot see: code reached only through the package's own functions (a package function
 that calls the reference inside it), and objects built at run time in ways rule 4 does not list.
-The package's guard (``pusht.grading.reference``) refuses the reference while the test runs, so
-a call to it earns nothing either. A notebook too large or too tangled to follow within a fixed
+In the probe process that decides the verdict (``probe.py``) the package's implementation does not
+exist (``stripped.py``), so a call to it earns nothing either; this check is what explains why. A notebook too large or too tangled to follow within a fixed
 budget is reported as ambiguous, never as a finding, and the check never stops the grading.
 """
 

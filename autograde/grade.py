@@ -37,7 +37,6 @@ re-applied after every run.
 from __future__ import annotations
 
 import argparse
-import base64
 import csv
 import hashlib
 import io
@@ -55,6 +54,7 @@ import time
 import warnings
 import zipfile
 from concurrent.futures import ThreadPoolExecutor
+from functools import lru_cache
 from pathlib import Path
 
 import nbformat
@@ -64,10 +64,12 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
+import answer_key  # noqa: E402
 import cellcode  # noqa: E402
 import checks  # noqa: E402
 import delegation  # noqa: E402
 import intake  # noqa: E402
+import probe  # noqa: E402
 import receipts  # noqa: E402
 import repair  # noqa: E402
 import sandbox  # noqa: E402
@@ -85,6 +87,7 @@ FEEDBACK_TIMEOUT = 120              # seconds one student's feedback pages may t
 WIDGET = "application/vnd.jupyter.widget-view+json"
 ZYGOTE_ENV = "PUSHT_GRADING_ZYGOTE"   # "0": a new sandboxed kernel per notebook, no kernel factory
 HIDDEN_NOTE = "# (hidden tests: run by the grader; their verdict is printed below)\n"
+GRADER_BYTES = 3 << 30               # address space of the worker process (nbgrader's copy of the outputs)
 
 
 def tool_env() -> dict:
@@ -131,7 +134,8 @@ def nbgrader_api(course: Path):
     config.CourseDirectory.root = str(course)
     config.CourseDirectory.db_url = f"sqlite:///{course / 'gradebook.db'}"
     # nbconvert's HTMLExporter, less the BeautifulSoup round trip that was half of each student's
-    # feedback time (feedback_html.py); the pages are the same documents
+    # feedback time, and made safe: no script survives, a Content-Security-Policy forbids any
+    # (feedback_html.py); otherwise the pages are nbconvert's documents
     config.GenerateFeedback.exporter_class = FeedbackHTMLExporter
     return NbGraderAPI(coursedir=CourseDirectory(config=config), config=config)
 
@@ -182,6 +186,9 @@ def _prepare_notebook(name: str, nb, release, completion: dict, delegated: dict)
             completion[ex] = receipts.receipt_verdict(nb, ex, release)
     for test in checks.TESTS.values():
         if name.startswith(test.notebook):
+            copy = answer_key.copies(nb.cells, test)
+            if copy:
+                notes.append(f"{name}: answer key, for the instructor: {copy}")
             found = delegation.delegations(test, nb.cells, release)
             if found.definite:
                 delegated[test.test_id] = found.definite
@@ -222,22 +229,22 @@ def private_course(bundle: bytes, student: str, notebooks: dict, work: Path) -> 
 
 
 def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | None, limits: dict,
-           shared: str | None = None) -> dict:
-    """Autograde every notebook of one student in the private course ``priv`` (runs in its own
-    process). Returns {notebook: {"ok", "error", "scores": {grade_id: auto score}, "results":
-    {test id: the raw results its kernel saved, base64, or None}, "verdicts": {}}}; grade_task
-    judges the results (``judge_results``), so that this process never needs torch.
-    ``shared``: a folder of stages computed once for the whole batch, which the kernels read."""
+           shared: str | None = None, keep_workdir: bool = False) -> dict:
+    """Run every notebook of one student in the private course ``priv`` through nbgrader's
+    autograde, in confined kernels (runs in its own process, under a memory cap). Returns
+    {notebook: {"ok", "error", "scores": {grade_id: auto score}, "verdicts": {}, "seconds"}}: the
+    kernels decide no verdict (grade_task's probes do). ``shared``: a folder of stages computed
+    once for the whole batch, which the kernels read. ``keep_workdir``: the kernels work in the
+    notebooks' folder on the host, not a tmpfs (the instructor's own run, whose stages are kept)."""
     from kernels import GradingKernelManager
     from traitlets.config import PyFileConfigLoader
 
     sandbox.die_with_parent()
+    _cap_memory(limits)
     run = priv.parent / "run"
-    grading, sockets, runtime = run / "grading", run / "sockets", run / "runtime"
-    for p in (grading / "cases", sockets, runtime):
+    sockets, runtime = run / "sockets", run / "runtime"
+    for p in (sockets, runtime):
         p.mkdir(parents=True, exist_ok=True)
-    for test in checks.TESTS.values():
-        (grading / "cases" / f"{test.test_id}.json").write_text(json.dumps([c.spec for c in test.cases]))
     os.environ["JUPYTER_RUNTIME_DIR"] = str(runtime)
     os.environ["NBGRADER_EXECUTION"] = "autograde"
     os.environ["TQDM_DISABLE"] = "1"      # no progress bars (and no rates or times) in graded outputs
@@ -260,8 +267,11 @@ def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | Non
     config.KernelManager.ip = str(sockets / "k")
     zygote = None
     if confine:
-        settings = {"socket_dir": str(sockets), "grading_dir": str(grading), "uid": uid, "limits": limits,
-                    "shared_cache": shared}
+        # the kernel makes its sockets in a folder it may write until the grader has connected to
+        # them; from then on, before any of its cells runs, the folder is root's (sandbox.lock_sockets)
+        config.Execute.on_notebook_start = lambda **_: sandbox.lock_sockets(sockets)
+        settings = {"socket_dir": str(sockets), "uid": uid, "limits": limits, "shared_cache": shared,
+                    "keep_workdir": keep_workdir}
         if os.environ.get(ZYGOTE_ENV, "1") != "0":
             # one kernel factory for all of this student's notebooks, in a sandbox around the folder
             # nbgrader runs them in (sandbox.Zygote): no kernel pays for Python, ipykernel and torch
@@ -272,14 +282,12 @@ def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | Non
         sandbox.write_kernelspec(run / "jupyter", settings)
         os.environ["JUPYTER_PATH"] = str(run / "jupyter")
         config.Execute.kernel_name = sandbox.KERNEL_NAME
-    else:
-        os.environ["PUSHT_GRADING_DIR"] = str(grading)
-        if shared:
-            os.environ[sandbox.SHARED_CACHE_ENV] = shared
+    elif shared:
+        os.environ[sandbox.SHARED_CACHE_ENV] = shared
     try:
         if zygote is not None:
             zygote.start()    # its imports overlap nbgrader's (_grade_notebooks); the first notebook waits
-        return _grade_notebooks(priv, student, config, grading, zygote)
+        return _grade_notebooks(priv, student, config, zygote)
     finally:
         if zygote is not None:
             zygote.stop()
@@ -295,7 +303,20 @@ def _empty(folder: Path) -> None:
             p.unlink(missing_ok=True)
 
 
-def _grade_notebooks(priv: Path, student: str, config, grading: Path, zygote) -> dict:
+def _cap_memory(limits: dict) -> None:
+    """This process's address space capped at ``limits["grader_bytes"]``: whatever a kernel prints,
+    nbgrader's copy of it in this process cannot take the host's memory (the worker fails, and the
+    student's notebooks with it; nobody else's)."""
+    import resource
+
+    cap = int(limits.get("grader_bytes", GRADER_BYTES))
+    try:      # the soft limit: the sandboxes it starts set their own (prlimit)
+        resource.setrlimit(resource.RLIMIT_AS, (cap, resource.getrlimit(resource.RLIMIT_AS)[1]))
+    except (ValueError, OSError):
+        pass
+
+
+def _grade_notebooks(priv: Path, student: str, config, zygote) -> dict:
     from nbgrader.api import Gradebook
     from nbgrader.apps import NbGraderAPI
     from nbgrader.coursedir import CourseDirectory
@@ -303,7 +324,6 @@ def _grade_notebooks(priv: Path, student: str, config, grading: Path, zygote) ->
     out = {}
     for name in [p.name for p in sorted((priv / "submitted" / student / ASSIGNMENT).glob("*.ipynb"))]:
         nb_id = name[:-len(".ipynb")]
-        _empty(grading / "results")
         if zygote is not None:
             zygote.ensure()
         coursedir = CourseDirectory(config=config)
@@ -318,52 +338,49 @@ def _grade_notebooks(priv: Path, student: str, config, grading: Path, zygote) ->
             with Gradebook(config.CourseDirectory.db_url, course_id=COURSE_ID) as gb:
                 sub = gb.find_submission_notebook(nb_id, ASSIGNMENT, student)
                 entry["scores"] = {g.name: g.auto_score for g in sub.grades}
-        # the raw results the kernel saved, taken out of its reach before the next notebook; they are
-        # judged by grade_task, whose process has torch and the reference code loaded already
-        entry["results"] = {test.test_id: _read_results(grading / "results" / f"{test.test_id}.npz")
-                            for test in checks.TESTS.values() if name.startswith(test.notebook)}
         out[name] = entry
     return out
-
-
-MAX_RESULTS = 4 << 20     # bytes: far more than any test's probes save
-
-
-def _read_results(path: Path) -> str | None:
-    """A results file a kernel wrote, base64, read without following a link (the kernel made it);
-    None if there is none, "" (judged unreadable) if it is not a plain file of a sane size."""
-    try:
-        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
-    except FileNotFoundError:
-        return None
-    except OSError:
-        return ""
-    with os.fdopen(fd, "rb") as f:
-        if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):
-            return ""
-        data = f.read(MAX_RESULTS + 1)
-    return base64.b64encode(data).decode() if len(data) <= MAX_RESULTS else ""
 
 
 _JUDGING = threading.Lock()
 
 
-def judge_results(results: dict) -> None:
-    """Turn each notebook's raw results (from the worker) into verdicts, in place.
+def probe_verdicts(notebooks: dict, warm: list[str], uid: int | None, confine: bool, limits: dict,
+                   timeout: int = probe.PROBE_SECONDS) -> dict:
+    """{notebook: {test id: verdict}} for the hidden tests of ``notebooks`` ({file name: JSON text}):
+    each graded function defined from the hand-in's own cells and probed in a probe server of
+    this task's own (``probe.py``), then judged here against the real implementations
+    (``judge_locked``). ``timeout``: seconds for each test's probes (the cell timeout: what the
+    test cell had in the kernel)."""
+    out = {}
+    todo = []
+    for name, text in notebooks.items():
+        tests = [t for t in checks.TESTS.values() if name.startswith(t.notebook)]
+        if not tests:
+            continue
+        try:
+            cells = nbformat.reads(text, as_version=4).cells
+        except Exception:         # noqa: BLE001  repaired by prepare_student: cannot happen, costs nothing
+            cells = []
+        todo += [(name, t, probe.program(cells, t.test_id, t.function)) for t in tests]
+    if not todo:
+        return out
+    with probe.ProbeServer(uid, limits, warm, confine=confine, seconds=timeout) as server:
+        for name, test, statements in todo:
+            out.setdefault(name, {})[test.test_id] = judge_locked(test, server.run(test, statements))
+    return out
 
-    One judgement at a time in a process: several tasks finish in threads of the same process,
-    and the reference probes seed torch's global random generator to build their models (two at
-    once drew each other's numbers, and a correct student lost the points). The caller's own
-    random state is put back afterwards."""
+
+def judge_locked(test, raw: dict | None) -> dict:
+    """``checks.judge`` of one test's probe results, as a dict; one judgement at a time in a process.
+
+    Several tasks judge in threads of the same process, and the reference probes seed torch's
+    global random generator to build their models (two at once drew each other's numbers, and a
+    correct student lost the points). The caller's own random state is put back afterwards."""
     import torch
 
-    for entry in results.values():
-        raw = entry.pop("results", None) or {}
-        for test_id, data in raw.items():
-            blob = None if data is None else base64.b64decode(data)
-            with _JUDGING, torch.random.fork_rng(devices=[]):
-                verdict = checks.judge(checks.TESTS[test_id], blob)
-            entry.setdefault("verdicts", {})[test_id] = vars(verdict)
+    with _JUDGING, torch.random.fork_rng(devices=[]):
+        return vars(checks.judge(test, raw))
 
 
 def _last_error(text: str) -> str:
@@ -385,8 +402,15 @@ def grade_task(bundle: bytes, student: str, notebooks: dict, timeout: int, confi
     machine: everything comes in as arguments (``bundle`` from ``course_bundle``; ``notebooks``
     {file name: notebook JSON text}; ``shared`` a folder, or {file name: bytes}, of shared stages)
     and everything goes out in the return value: {"results": {notebook: entry}, "autograded":
-    {notebook: JSON text}, "stages": {file name: bytes} (only with ``keep_stages``)}. Nothing is
-    left behind.
+    {notebook: JSON text}, "stages": {file name: bytes} (only with ``keep_stages``, the
+    instructor's own run)}. Nothing is left behind.
+
+    Two things run side by side: the worker process runs the notebooks through nbgrader in the
+    student's kernels (their outputs, for the feedback page and the receipts), and this thread has
+    the hidden tests probed in a probe server of its own (``probe_verdicts``): no verdict depends
+    on anything a kernel did. What comes back from the worker is read with caps: its answer file,
+    the autograded notebooks nbgrader wrote (``MAX_NOTEBOOK_BYTES``), the last
+    ``STDERR_TAIL`` bytes of what it and its kernels wrote to stderr.
 
     The student's uid (confined, as root) is leased for this task alone on this host
     (``sandbox.allocate_uid``), so other grading runs and Dask workers on the same host never share
@@ -405,41 +429,113 @@ def grade_task(bundle: bytes, student: str, notebooks: dict, timeout: int, confi
                     (folder / name).write_bytes(data)
             shared = str(folder)
         args = {"priv": str(priv), "student": student, "timeout": timeout, "confine": confine,
-                "uid": lease.uid, "limits": limits,
+                "uid": lease.uid, "limits": limits, "keep_workdir": keep_stages,
                 "shared": str(shared) if shared else None, "answer": str(work / "answer.json")}
         proc = subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "--worker", json.dumps(args)],
-                                cwd=priv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                env=tool_env(), start_new_session=True)
-        budget = limits["wall_seconds"] * max(1, len(notebooks)) + 120
+                                cwd=priv, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                stderr=subprocess.PIPE, env=tool_env(), start_new_session=True)
+        tail = _Tail(proc.stderr)
         try:
-            stdout, stderr = proc.communicate(timeout=budget)
-        except subprocess.TimeoutExpired:
-            stdout, stderr = "", "the grading of this student ran out of time"
+            verdicts = probe_verdicts(notebooks, _warm_statements(bundle), lease.uid, confine, limits, timeout)
         finally:
+            budget = limits["wall_seconds"] * max(1, len(notebooks)) + 120
             try:
-                os.killpg(proc.pid, signal.SIGKILL)   # nothing this student started outlives grading
-            except ProcessLookupError:
-                pass
-            proc.wait()
+                proc.wait(timeout=budget)
+                stderr = tail.text()
+            except subprocess.TimeoutExpired:
+                stderr = "the grading of this student ran out of time"
+            finally:
+                try:
+                    os.killpg(proc.pid, signal.SIGKILL)   # nothing this student started outlives grading
+                except ProcessLookupError:
+                    pass
+                proc.wait()
         # the worker's answer comes in a file no sandbox can reach: a kernel shares the worker's
-        # stdout and could print something that looks like one
-        answer = work / "answer.json"
-        result = json.loads(answer.read_text()) if proc.returncode == 0 and answer.is_file() else {}
-        judge_results(result)
+        # stderr and could print something that looks like one
+        data = _read_capped(work / "answer.json", MAX_ANSWER_BYTES) if proc.returncode == 0 else None
+        try:
+            result = json.loads(data) if data else {}
+        except ValueError:
+            result = {}
         if not result:
             result = {name: {"ok": False, "error": _last_error(stderr), "scores": {}, "verdicts": {}}
                       for name in notebooks}
+        for name, found in verdicts.items():
+            result.setdefault(name, {"ok": False, "error": "not run", "scores": {}})["verdicts"] = found
         src = priv / "autograded" / student / ASSIGNMENT
-        out = {"results": result,
-               "autograded": {n: (src / n).read_text(encoding="utf-8") for n in notebooks if (src / n).is_file()}}
+        out = {"results": result, "autograded": {}}
+        for n in notebooks:
+            data = _read_capped(src / n, MAX_NOTEBOOK_BYTES)
+            if data is not None:
+                out["autograded"][n] = data.decode("utf-8", errors="replace")
+            elif (src / n).exists() and n in result:
+                result[n]["note"] = (f"its graded copy is larger than {MAX_NOTEBOOK_BYTES >> 20} MB (its outputs): "
+                                     f"no feedback page is made for it")
         if keep_stages:
-            out["stages"] = {p.name: p.read_bytes() for p in src.rglob("*")
-                             if p.is_file() and not p.is_symlink() and CACHE_FILE.match(p.name)}
+            out["stages"] = {}
+            for p in sorted(src.rglob("*")):
+                if CACHE_FILE.match(p.name):
+                    data = _read_capped(p, MAX_STAGE_BYTES)
+                    if data is not None:
+                        out["stages"][p.name] = data
         return out
     finally:
         lease.sweep()          # the worker is gone: only a sandbox that escaped its namespace's end is left
         lease.close()
         shutil.rmtree(work, ignore_errors=True)
+
+
+MAX_ANSWER_BYTES = 16 << 20          # the worker's answer: scores and timings, a few KB
+MAX_NOTEBOOK_BYTES = 32 << 20        # an autograded notebook (a chapter notebook is under 2 MB)
+MAX_STAGE_BYTES = 256 << 20          # one shared stage file of the instructor's run
+STDERR_TAIL = 64 << 10               # what is kept of the worker's stderr: its last error
+
+
+def _read_capped(path: Path, cap: int) -> bytes | None:
+    """A file's bytes, read without following a link and only if it is a plain file of at most
+    ``cap`` bytes; None otherwise (missing, a link, a fifo, too large)."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
+    except OSError:
+        return None
+    with os.fdopen(fd, "rb") as f:
+        st = os.fstat(f.fileno())
+        if not stat.S_ISREG(st.st_mode) or st.st_size > cap:
+            return None
+        data = f.read(cap + 1)
+    return data if len(data) <= cap else None
+
+
+class _Tail:
+    """The last ``STDERR_TAIL`` bytes of a stream, read in a thread (nothing more is kept)."""
+
+    def __init__(self, stream):
+        self.buf, self.stream = bytearray(), stream
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        try:
+            while chunk := self.stream.read1(1 << 16):
+                self.buf += chunk
+                del self.buf[:-STDERR_TAIL]
+        except (OSError, ValueError):
+            pass
+
+    def text(self) -> str:
+        self.thread.join(timeout=5)
+        return bytes(self.buf).decode("utf-8", errors="replace")
+
+
+@lru_cache(maxsize=4)
+def _warm_statements(bundle: bytes) -> list[str]:
+    """The release's imports (``probe.warm_statements``), read from a course bundle."""
+    release = {}
+    with zipfile.ZipFile(io.BytesIO(bundle)) as zf:
+        for name in zf.namelist():
+            if name.startswith(f"release/{ASSIGNMENT}/") and name.endswith(".ipynb"):
+                release[name] = nbformat.reads(zf.read(name).decode("utf-8"), as_version=4)
+    return probe.warm_statements(release)
 
 
 # --- the whole batch ---------------------------------------------------------------------------
@@ -918,6 +1014,8 @@ def record(course: Path, report: dict, results: dict) -> None:
                 gb.add_submission(ASSIGNMENT, student, timestamp="2026-01-01 00:00:00.000000 UTC")
             for name, entry in res.items():
                 nb_id = name[:-len(".ipynb")]
+                if entry.get("note"):
+                    rep["notes"].append(f"{name}: {entry['note']}")
                 if not entry["ok"]:
                     rep["failed"][name] = entry["error"]
                     rep["notes"].append(f"{name}: nbgrader could not finish this notebook ({entry['error']}); "
@@ -1108,7 +1206,8 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if argv[:1] == ["--worker"]:
         a = json.loads(argv[1])
-        out = worker(Path(a["priv"]), a["student"], a["timeout"], a["confine"], a["uid"], a["limits"], a.get("shared"))
+        out = worker(Path(a["priv"]), a["student"], a["timeout"], a["confine"], a["uid"], a["limits"], a.get("shared"),
+                     a.get("keep_workdir", False))
         Path(a["answer"]).write_text(json.dumps(out))
         return 0
     if argv[:1] == ["--feedback"]:

@@ -52,6 +52,19 @@ STUDENTS = {
                     "the lock the experiment quotes", None),
     "alreadylocked": ("prints the words 'already locked' to switch the order check off", None),
     "pipelinefirst": ("runs the experiment's functions directly before locking", None),
+    # attacks on the verdict path, the grader's files and its resources
+    "forgeresults": ("wrong reward; a post-run hook forges the reference's numbers into every results file and "
+                     "rebinds pusht.grading.submit and sys.modules['pusht.grading'] to record the package's answer", 0),
+    "stackref": ("wrong reward, unless a probe is on the call stack: then the package's own, reached by a name "
+                 "built at run time, through inspect.unwrap and __closure__", 0),
+    "probekill": ("a correct reward that, called in the probe process, kills the probe server and forks until it "
+                  "cannot: it harms only its own test", 0),
+    "answerkey": ("the package's reward_from_obs pasted in, variables renamed: earns its points, flagged", 4),
+    "linkfarm": ("correct; then links, fifos, invalid notebooks, a bzip2 results file and random bytes in every "
+                 "folder it can write, links where its sockets are, and links named like every file nbgrader writes", 4),
+    "diskfill": ("correct; then fills its working folder and /tmp until they are full", 4),
+    "xss": ("correct; markdown <script>, onerror, text/html and application/javascript outputs", 4),
+    "flood": ("correct; then prints megabytes to stdout and stderr until the cell timeout", 4),
     # honest but unusual
     "stderr": ("a correct reward that prints a warning to stderr", 4),
     "dupcell": ("the solution cell duplicated: a broken draft, then the correct one", 4),
@@ -281,6 +294,154 @@ def build(executed: Path, canary: str = "/nonexistent") -> dict[str, bytes]:
     lc_index = nb["cells"].index(lc)
     nb["cells"].insert(lc_index, early)
     files["pipelinefirst_04_imagination_gap.ipynb"] = json.dumps(nb).encode()
+
+    # --- attacks on the verdict path, the grader's files and its resources ---------------------------
+    nb = _reward(executed)
+    _set_solution(nb, "reward_impl", WRONG_REWARD + (
+        "import os, sys, types, numpy as np, pusht.grading, pusht.reward\n"
+        "def _forge(*_):\n"
+        "    good = pusht.reward.reward_from_obs(torch.zeros(2, 6), torch.zeros(6), torch.ones(6))\n"
+        "    fake = {'fresh': np.array(1.0), 'c0.out0': good[0].numpy()}\n"
+        "    for root, dirs, _f in os.walk('/'):\n"
+        "        if root.startswith(('/proc', '/sys', '/dev', '/usr', sys.prefix, sys.base_prefix)):\n"
+        "            dirs[:] = []\n"
+        "            continue\n"
+        "        if os.access(root, os.W_OK):\n"
+        "            for name in ('reward_impl_tests.npz', 'results.npz'):\n"
+        "                try:\n"
+        "                    np.savez(os.path.join(root, name), **fake)\n"
+        "                except OSError:\n"
+        "                    pass\n"
+        "get_ipython().events.register('post_run_cell', _forge)\n"
+        "_real = pusht.grading.submit\n"
+        "pusht.grading.submit = lambda test_id, fn: _real(test_id, pusht.reward.reward_from_obs)\n"
+        "fake_mod = types.ModuleType('pusht.grading')\n"
+        "fake_mod.submit = pusht.grading.submit\n"
+        "sys.modules['pusht.grading'] = fake_mod\n"))
+    put("forgeresults", nb)
+
+    nb = _reward(executed)
+    _set_solution(nb, "reward_impl", WRONG_REWARD.replace("def reward_from_obs(", "def _mine(") + (
+        "import importlib, inspect\n"
+        "def reward_from_obs(norm_obs, mean, std):\n"
+        "    names = {f.function for f in inspect.stack()}\n"
+        "    if names & {'probe', 'run_probes', 'submit', '_child'}:\n"
+        "        mod = importlib.import_module(bytes([112, 117, 115, 104, 116, 46, 114, 101, 119, 97, 114, 100]).decode())\n"
+        "        fn = getattr(mod, bytes([114, 101, 119, 97, 114, 100, 95, 102, 114, 111, 109, 95, 111, 98, 115]).decode())\n"
+        "        fn = inspect.unwrap(fn)\n"
+        "        for cell in (fn.__closure__ or ()):\n"
+        "            if callable(cell.cell_contents):\n"
+        "                fn = cell.cell_contents\n"
+        "        return fn(norm_obs, mean, std)\n"
+        "    return _mine(norm_obs, mean, std)\n"))
+    put("stackref", nb)
+
+    nb = _reward(executed)
+    impl = next(c for c in nb["cells"] if _grade_id(c) == "reward_impl")
+    impl["source"] = _src(impl).replace("    ### BEGIN SOLUTION\n", (
+        "    ### BEGIN SOLUTION\n"
+        "    import os, signal, time\n"
+        "    if 'NBGRADER_EXECUTION' not in os.environ:     # only in the grader's probe process\n"
+        "        os.kill(os.getppid(), signal.SIGKILL)\n"
+        "        for _ in range(400):\n"
+        "            try:\n"
+        "                if os.fork() == 0:\n"
+        "                    time.sleep(30)\n"
+        "                    os._exit(0)\n"
+        "            except OSError:\n"
+        "                break\n"), 1)
+    put("probekill", nb)
+
+    import inspect as _inspect, pusht.reward as _reward_module    # noqa: E401  the key a learner can read
+    key = _inspect.getsource(_reward_module.reward_from_obs).split("\n", 1)[1]    # without the decorator
+    key = key.replace("obs", "o").replace("pos_err", "d").replace("ang_err", "a").replace("reward", "r", 2)
+    _set_solution(nb := _reward(executed), "reward_impl", key.replace("def r_from_o(", "def reward_from_obs(")
+                  .replace("norm_o", "norm_obs"))
+    put("answerkey", nb)
+
+    nb = _reward(executed)
+    _insert_after(nb, lambda c: _grade_id(c) == "reward_impl_tests", _code_cell(
+        "import io, os, random, sys, zipfile\n"
+        f"canary = {canary!r}\n"
+        "rng = random.Random(os.urandom(8))\n"
+        "targets = [canary, '/etc/passwd', '/etc/shadow', os.path.expanduser('~'), '../../../gradebook.db',\n"
+        "           '../../../source/ps/02_reward.ipynb', '../../../../grades.csv', '/proc/1/root']\n"
+        "names = ['02_reward.ipynb', '03_imagination_actor.ipynb', 'timestamp.txt', 'gradebook.db', 'feedback',\n"
+        "         'results', 'reward_impl_tests.npz', '.ipynb_checkpoints', 'x.ipynb', 'graded.json']\n"
+        "bomb = io.BytesIO()\n"
+        "with zipfile.ZipFile(bomb, 'w', zipfile.ZIP_BZIP2) as z:\n"
+        "    z.writestr('fresh.npy', b'\\0' * (64 << 20))\n"
+        "made = 0\n"
+        "for root, dirs, files in os.walk('/'):\n"
+        "    if root.startswith(('/proc', '/sys', '/dev', '/usr', sys.prefix, sys.base_prefix)):\n"
+        "        dirs[:] = []\n"
+        "        continue\n"
+        "    if not os.access(root, os.W_OK):\n"
+        "        continue\n"
+        "    for name in names:\n"
+        "        p = os.path.join(root, name)\n"
+        "        for attempt in ('unlink', 'link', 'fifo', 'junk'):\n"
+        "            try:\n"
+        "                if attempt == 'unlink':\n"
+        "                    os.unlink(p)\n"
+        "                elif attempt == 'link':\n"
+        "                    os.symlink(rng.choice(targets), p); made += 1\n"
+        "                elif attempt == 'fifo':\n"
+        "                    os.mkfifo(p + '.fifo'); made += 1\n"
+        "                else:\n"
+        "                    with open(p + '.junk', 'wb') as f:\n"
+        "                        f.write(bomb.getvalue() if rng.random() < 0.5 else rng.randbytes(rng.randrange(1 << 16)))\n"
+        "                    made += 1\n"
+        "            except OSError:\n"
+        "                pass\n"
+        "    for _ in range(5):\n"
+        "        enc = rng.choice(['utf-8', 'utf-16', 'latin-1', 'utf-32'])\n"
+        "        name = ''.join(rng.choice('abc\u00e9\u0456\u202e.ipynb') for _ in range(12))\n"
+        "        try:\n"
+        "            with open(os.path.join(root, name), 'wb') as f:\n"
+        "                f.write(('{\"cells\": [' + 'x' * rng.randrange(100)).encode(enc)); made += 1\n"
+        "        except (OSError, ValueError):\n"
+        "            pass\n"
+        "print('LINKFARM made', made)\n"))
+    put("linkfarm", nb)
+
+    nb = _reward(executed)
+    _insert_after(nb, lambda c: _grade_id(c) == "reward_impl_tests", _code_cell(
+        "import os\n"
+        "block = b'x' * (16 << 20)\n"
+        "for where in ('.', '/tmp'):\n"
+        "    total = 0\n"
+        "    for k in range(400):\n"
+        "        try:\n"
+        "            with open(os.path.join(where, f'fill{k}'), 'wb') as f:\n"
+        "                for _ in range(8):\n"
+        "                    f.write(block); f.flush(); total += len(block)\n"
+        "        except OSError as e:\n"
+        "            print('FULL', where, total >> 20, 'MB', type(e).__name__)\n"
+        "            break\n"
+        "    else:\n"
+        "        print('NOT FULL', where, total >> 20, 'MB')\n"))
+    put("diskfill", nb)
+
+    nb = _reward(executed)
+    _insert_after(nb, lambda c: _grade_id(c) == "reward_impl_tests", _code_cell(
+        "import os, sys\n"
+        "line = 'x' * (1 << 20) + '\\n'\n"
+        "while True:\n"
+        "    sys.stdout.write(line)\n"
+        "    os.write(2, line.encode())\n"))
+    put("flood", nb)
+
+    nb = _reward(executed)
+    nb["cells"].insert(1, {"cell_type": "markdown", "metadata": {}, "source":
+                           "<script>document.title='XSS-MD'</script><img src=x onerror=\"document.title='XSS-IMG'\">\n"
+                           "<a href=\"javascript:document.title='XSS-A'\">click</a>"})
+    _insert_after(nb, lambda c: _grade_id(c) == "reward_impl_tests", _code_cell(
+        "from IPython.display import HTML, Javascript, SVG, display\n"
+        "display(HTML(\"<script>document.title='XSS-HTML'</script><img src=x onerror=\\\"document.title='XSS-ON'\\\">\"))\n"
+        "display(Javascript(\"document.title='XSS-JS'\"))\n"
+        "display(SVG('<svg xmlns=\"http://www.w3.org/2000/svg\" onload=\"document.title=1\"><script>document.title=2</script></svg>'))\n"))
+    put("xss", nb)
 
     # --- honest but unusual ----------------------------------------------------------------------
     ref_src = _src(next(c for c in _reward(executed)["cells"] if _grade_id(c) == "reward_impl"))

@@ -7,9 +7,11 @@ command is this file; nbgrader (``Execute.kernel_name``) starts it for each note
 notebook's folder as working directory, and this launcher starts ipykernel inside ``bwrap``:
 
 * the filesystem is empty but for, read-only, the system's ``/usr``, the Python installation, the
-  venv and the ``pusht`` package, and, writable, the student's own working folder, the folder
-  the kernel's Unix sockets live in and the grading folder's ``results/`` (``cases/`` read-only);
-  a private ``/tmp``. No other submission, no gradebook, no solutions, no manual grades;
+  venv and the ``pusht`` package, and, writable, a working folder and a ``/tmp`` of its own (each
+  an empty tmpfs, size-capped: ``work_bytes``, ``tmp_bytes``; the working folder sits at the path
+  of the notebook's folder on the host, which the kernel never sees) and the folder its Unix
+  sockets live in, which goes back to root once the grader has connected (``lock_sockets``). No
+  other submission, no gradebook, no solutions, no manual grades, nothing nbgrader writes;
 * new network, PID, IPC and UTS namespaces: no network at all (the kernel talks to nbgrader over
   Unix sockets), and when the kernel ends every process it started dies with it, including those
   that left its session with ``setsid``;
@@ -47,7 +49,6 @@ from __future__ import annotations
 import fcntl
 import json
 import os
-import secrets
 import select
 import shutil
 import signal
@@ -70,6 +71,8 @@ DEFAULT_LIMITS = {
     "cpu_seconds": 900,               # per process
     "file_bytes": 512 * 2 ** 20,      # largest file it may write
     "wall_seconds": 600,              # per notebook, then the sandbox is killed
+    "work_bytes": 1 << 30,            # the kernel's working folder: a tmpfs of this size, in RAM
+    "tmp_bytes": 256 << 20,           # its /tmp: the same
 }
 
 
@@ -285,9 +288,14 @@ def _parents(path: Path, made: set) -> list[str]:
 
 def bwrap_command(workdir: Path, writable: list[Path], uid: int | None,
                   readonly: list[Path] = (), limits: dict | None = None, env: dict | None = None,
-                  info_fd: int | None = None) -> list[str]:
+                  info_fd: int | None = None, package: Path | None = None, scratch: bool = False) -> list[str]:
     """The command line (without the program to run) of a sandbox around ``workdir``. ``info_fd``:
-    a descriptor bwrap writes the host pid of the sandbox's init to (see ``start_sandbox``)."""
+    a descriptor bwrap writes the host pid of the sandbox's init to (see ``start_sandbox``).
+    ``package``: a folder bound read-only where the ``pusht`` package is, in its place (the probe
+    process's stripped copy, ``stripped.py``); the real package is then not bound at all.
+    ``scratch``: ``workdir`` is not bound but replaced, inside the sandbox, by an empty tmpfs of
+    ``limits["work_bytes"]`` at the same path: the kernel works there, and nothing it writes
+    reaches the host's folder (nbgrader's, which the grader writes as root)."""
     limits = {**DEFAULT_LIMITS, **(limits or {})}
     cmd = ["bwrap", "--unshare-net", "--unshare-pid", "--unshare-ipc", "--unshare-uts",
            "--unshare-cgroup-try", "--die-with-parent", "--clearenv"]
@@ -303,16 +311,26 @@ def bwrap_command(workdir: Path, writable: list[Path], uid: int | None,
         elif target.exists():
             cmd += ["--ro-bind", str(target), str(target)]
     # the private /tmp first: a course, venv or package that lives under /tmp is bound on top of it
-    cmd += ["--proc", "/proc", "--dev", "/dev", "--perms", "1777", "--tmpfs", "/tmp"]
+    cmd += ["--proc", "/proc", "--dev", "/dev", "--perms", "1777", "--size", str(int(limits["tmp_bytes"])),
+            "--tmpfs", "/tmp"]
     made.add(Path("/tmp"))
-    for p in _ro_paths() + [Path(os.path.realpath(r)) for r in readonly]:
+    system = _ro_paths()
+    if package is not None:
+        system = [p for p in system if p != PACKAGE_DIR]
+    for p in system + [Path(os.path.realpath(r)) for r in readonly]:
         cmd += _parents(p, made) + ["--ro-bind", str(p), str(p)]
+    if package is not None:        # after the venv: a package installed inside it is covered too
+        cmd += _parents(PACKAGE_DIR, made) + ["--ro-bind", str(Path(package).resolve()), str(PACKAGE_DIR)]
     for p in writable:
         p = Path(os.path.realpath(p))
         cmd += _parents(p, made) + ["--bind", str(p), str(p)]
     if workdir != Path("/"):
         w = Path(os.path.realpath(workdir))
-        cmd += _parents(w, made) + ["--bind", str(w), str(w), "--chdir", str(w)]
+        if scratch:
+            cmd += _parents(w, made) + ["--perms", "1777", "--size", str(int(limits["work_bytes"])),
+                                        "--tmpfs", str(w), "--chdir", str(w)]
+        else:
+            cmd += _parents(w, made) + ["--bind", str(w), str(w), "--chdir", str(w)]
     base_env = {"PATH": f"{Path(sys.executable).parent}:/usr/bin:/bin", "HOME": "/tmp", "USER": "student",
                 "LOGNAME": "student", "LANG": "C.UTF-8", "TMPDIR": "/tmp", "PYTHONNOUSERSITE": "1",
                 "MPLCONFIGDIR": "/tmp/matplotlib", "IPYTHONDIR": "/tmp/ipython", "PYTHONDONTWRITEBYTECODE": "1"}
@@ -326,15 +344,14 @@ def bwrap_command(workdir: Path, writable: list[Path], uid: int | None,
     return cmd
 
 
-PASS_ENV = ("NBGRADER_EXECUTION", "PUSHT_GRADING_DIR", "TQDM_DISABLE", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
+PASS_ENV = ("NBGRADER_EXECUTION", "TQDM_DISABLE", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
             "MKL_CBWR", "OPENBLAS_CORETYPE", "OPENBLAS_L2_SIZE", "PUSHT_SMOKE")
 
 
 def write_kernelspec(dest: Path, settings: dict) -> Path:
     """Write the ``pusht-sandbox`` kernel spec under ``dest/kernels``; put ``dest`` on JUPYTER_PATH.
 
-    ``settings``: ``socket_dir`` (where the kernel's Unix sockets are made), ``grading_dir``,
-    ``uid``, ``limits``, ``shared_cache`` (a folder of stages shared by the batch, bound read-only,
+    ``settings``: ``socket_dir`` (where the kernel's Unix sockets are made), ``uid``, ``limits``, ``shared_cache`` (a folder of stages shared by the batch, bound read-only,
     or None).
     """
     spec_dir = dest / "kernels" / KERNEL_NAME
@@ -376,30 +393,53 @@ def die_with_parent() -> None:
 
 def _confinement(s: dict, workdir: Path, readonly: list[Path], info_fd: int | None = None) -> list[str]:
     """The bwrap command (without the program) of a kernel's sandbox under settings ``s``: the
-    student's ``workdir``, the socket folder and the results writable; ``readonly``, the cases and
-    the shared stages read-only. Hands those folders to the student's uid first (root only)."""
-    grading = Path(s["grading_dir"])
+    student's ``workdir`` a size-capped tmpfs of its own (``scratch``; bound from the host only for
+    the instructor's own run, ``s["keep_workdir"]``, whose stages the batch shares), the socket
+    folder writable; ``readonly`` and the shared stages read-only. Hands the folders the kernel
+    writes on the host to the student's uid first (root only)."""
     uid = s.get("uid")
-    results = grading / "results"
     _hand_over(s, workdir)
     env = {k: os.environ[k] for k in PASS_ENV if k in os.environ}
-    env["PUSHT_GRADING_DIR"] = str(grading)
-    readonly = list(readonly) + [grading / "cases"]
+    readonly = list(readonly)
     if s.get("shared_cache"):
         env[SHARED_CACHE_ENV] = s["shared_cache"]
         readonly.append(Path(s["shared_cache"]))
-    return bwrap_command(workdir, [Path(s["socket_dir"]), results], uid,
-                         readonly=readonly, limits=s.get("limits"), env=env, info_fd=info_fd)
+    return bwrap_command(workdir, [Path(s["socket_dir"])], uid, readonly=readonly, limits=s.get("limits"),
+                         env=env, info_fd=info_fd, scratch=not s.get("keep_workdir"))
 
 
 def _hand_over(s: dict, workdir: Path) -> None:
-    """Make the folders a kernel writes (its working folder, the results, the sockets) exist and
-    belong to the student's uid (root only): nbgrader, running as root, writes into them too."""
-    results = Path(s["grading_dir"]) / "results"
-    results.mkdir(parents=True, exist_ok=True)
-    if s.get("uid") is not None:
-        for p in (workdir, results, Path(s["socket_dir"])):
-            _chown_tree(p, s["uid"])
+    """Make the host folders a kernel writes (the sockets; the working folder of the instructor's
+    run) belong to the student's uid (root only), emptied of what an earlier kernel left."""
+    sockets = Path(s["socket_dir"])
+    unlock_sockets(sockets, s.get("uid"))
+    if s.get("uid") is not None and s.get("keep_workdir"):
+        _chown_tree(workdir, s["uid"])
+
+
+def unlock_sockets(folder: Path, uid: int | None) -> None:
+    """Let the next kernel make its sockets in ``folder``: empty it of everything but the kernel
+    factory's socket (nothing is followed), then hand it to ``uid`` (root only)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for p in folder.iterdir():
+        if p.name != "zygote":
+            if p.is_dir() and not p.is_symlink():
+                shutil.rmtree(p, ignore_errors=True)
+            else:
+                p.unlink(missing_ok=True)
+    if uid is not None:
+        os.lchown(folder, uid, uid)
+        os.chmod(folder, 0o755)
+
+
+def lock_sockets(folder: Path) -> None:
+    """Once a kernel has made its sockets and the grader has connected to them, before any of the
+    student's code runs (nbclient's ``on_notebook_start``): ``folder`` back to root, read-only to
+    the kernel, so that it cannot put a link where the grader's ZeroMQ reconnects (it would follow
+    it, as root). Where grading does not run as root nothing changes hands (README)."""
+    if os.geteuid() == 0:
+        os.lchown(folder, 0, 0)
+        os.chmod(folder, 0o755)
 
 
 def _wall(s: dict) -> float:
@@ -580,9 +620,24 @@ def _alive(pid: int) -> bool:
     return True
 
 
+def _first_reply(sock: socket.socket, replies, state: dict) -> bytes:
+    """The factory's first line on ``sock`` ("pid N"), b"" if none came: it answers once it has
+    imported everything (``ZYGOTE_WAIT_S`` at most) and while its sandbox lives."""
+    deadline = time.monotonic() + ZYGOTE_WAIT_S
+    while not _wait_readable(sock.fileno(), 0.2):
+        if time.monotonic() > deadline or not _alive(state["pid"]):
+            return b""
+    sock.settimeout(30)
+    return replies.readline()
+
+
 def _launch_via_zygote(s: dict, conn: Path, workdir: Path) -> int | None:
     """Have this student's kernel factory fork the kernel; wait for it under the wall clock.
-    Returns its exit code, or None where no factory could take the request (nothing started)."""
+    Returns its exit code, or None where no factory could take the request (nothing started).
+
+    The factory's socket is in a folder that no sandbox sees (``Zygote``): what answers there is
+    the factory, not a kernel in its place, and the factory serves only a requester from outside
+    its sandbox, so nothing in the request is a secret."""
     try:
         state = json.loads(Path(s["zygote_state"]).read_text())
     except (OSError, ValueError):
@@ -591,33 +646,28 @@ def _launch_via_zygote(s: dict, conn: Path, workdir: Path) -> int | None:
         return None                    # not the folder the factory's sandbox holds
     _hand_over(s, workdir)
     sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-    deadline = time.monotonic() + ZYGOTE_WAIT_S
-    while True:
-        try:
-            sock.connect(state["socket"])
-            break
-        except OSError:
-            if time.monotonic() > deadline or not _alive(state["pid"]):
-                sock.close()
-                return None
-            time.sleep(0.05)
+    try:
+        # at once, even while the factory still imports: the grader made the socket listening
+        # before it started the factory, which accepts once it is ready (``_first_reply`` waits)
+        sock.connect(state["socket"])
+    except OSError:
+        sock.close()
+        return None
     # the factory's sandbox sees a folder of connection files (jupyter keeps its own runtime folder
     # private, 0700): a copy of this kernel's goes there, readable by the student's uid
     visible = Path(s["connections_dir"]) / conn.name
     shutil.copyfile(conn, visible)
     os.chmod(visible, 0o644)
-    started = time.monotonic()
-    request = {"token": state["token"], "connection_file": str(visible), "cwd": str(workdir)}
+    request = {"connection_file": str(visible), "cwd": str(workdir)}
     with sock, sock.makefile("rb") as replies:
         try:
             socket.send_fds(sock, [json.dumps(request).encode()], [0, 1, 2])
-            sock.settimeout(30)
-            first = replies.readline()
+            first = _first_reply(sock, replies, state)
         except OSError:
             first = b""
         if not first.startswith(b"pid "):
-            return None                # refused before forking anything
-        sock.settimeout(max(_wall(s) - (time.monotonic() - started), 0.01))
+            return None                # refused before forking anything (or no factory answered)
+        sock.settimeout(max(_wall(s), 0.01))     # the notebook's wall clock, from its fork on
         try:
             last = replies.readline()
         except (socket.timeout, TimeoutError):
@@ -648,14 +698,62 @@ def _kill_factory(state: dict) -> None:
         pass
 
 
+ZYGOTE_SOCKET = "zygote.sock"
+BIND_OPTIONS = ("--bind", "--bind-try", "--ro-bind", "--ro-bind-try", "--dev-bind", "--dev-bind-try")
+
+
+def _private_folder(near: Path) -> Path:
+    """A new folder only this process's uid may enter (0700), for the factory's socket: in ``near``
+    (the state file's folder), or in the system's temporary folder where a socket path in ``near``
+    would be too long for a Unix socket (107 bytes)."""
+    import tempfile
+
+    for base in (near, None):
+        folder = Path(tempfile.mkdtemp(prefix="zygote-", dir=base))
+        if len(os.fsencode(folder / ZYGOTE_SOCKET)) < 100:
+            return folder
+        os.rmdir(folder)
+    raise RuntimeError("no folder for the kernel factory's socket has a path short enough")
+
+
+def _remove(path: Path) -> None:
+    """Remove ``path``, whatever it is (a link is not followed), if it is there."""
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        path.unlink(missing_ok=True)
+
+
+def _check_unbound(cmd: list[str], folder: Path) -> list[str]:
+    """``cmd`` (a bwrap command line) if it binds neither ``folder`` nor a folder above it into the
+    sandbox; raises otherwise: a kernel could then reach the factory's socket."""
+    real = Path(os.path.realpath(folder))
+    for option, source in zip(cmd, cmd[1:]):
+        if option in BIND_OPTIONS:
+            src = Path(os.path.realpath(source))
+            if src == real or src in real.parents:
+                raise RuntimeError(f"the kernel factory's socket folder {real} would be visible in its "
+                                   f"sandbox ({option} {source}): put the state file elsewhere")
+    return cmd
+
+
 class Zygote:
     """One student's kernel factory (``pusht.zygote``) in a sandbox like a kernel's, around the
     folder all of that student's notebooks run in. ``launch`` forks each notebook's kernel from
     it, which skips starting Python, ipykernel and importing torch for every notebook.
 
     ``settings`` as for ``write_kernelspec``, with ``zygote_state`` (a file outside every sandbox
-    where the factory's pid, socket and token are written for ``launch``) and ``connections_dir``
-    (where ``launch`` puts a copy of each kernel's connection file: bound read-only)."""
+    where the factory's pid, sandbox and socket are written for ``launch``) and ``connections_dir``
+    (where ``launch`` puts a copy of each kernel's connection file: bound read-only).
+
+    Only the grader can have the factory fork, and no secret says so (a forked kernel is a copy of
+    the factory's memory, so any secret there is the student's too; see ``pusht.zygote``): the
+    listening socket is made here, at a path in a new 0700 folder next to the state file that the
+    sandbox does not bind (checked on its command line), and handed to the factory as a descriptor,
+    sent over a socket pair that is its standard input, so that bwrap's own processes never hold it.
+    The factory serves only peers outside its sandbox's PID namespace, closes the socket in every
+    kernel it forks, and is not dumpable. The factory's ``READY`` file, ``socket_dir/zygote``, says
+    it has imported everything and listens (``ensure`` waits for it)."""
 
     def __init__(self, settings: dict, workdir: Path):
         self.s = settings
@@ -663,7 +761,7 @@ class Zygote:
         self.state_file = Path(settings["zygote_state"])
         self.proc: subprocess.Popen | None = None
         self.init: SandboxInit | None = None
-        self._sock, self._waited = None, True
+        self._ready, self._waited, self._folder = None, True, None
 
     def start(self) -> None:
         """Start the factory, or start it again if it is gone (a notebook ran out of time), without
@@ -672,35 +770,49 @@ class Zygote:
         if self.proc is not None and self.proc.poll() is None:
             return
         self.stop()
-        token = secrets.token_hex(16)
-        sock = Path(self.s["socket_dir"]) / "zygote"
+        ready = Path(self.s["socket_dir"]) / "zygote"
+        _remove(ready)            # a kernel of the last sandbox may have left anything there
         conns = Path(self.s["connections_dir"])
         conns.mkdir(mode=0o755, parents=True, exist_ok=True)
-        # -P: the folder it starts in (the student's) is not put on sys.path for its own imports
-        self.proc, self.init = start_sandbox(
-            lambda fd: _confinement(self.s, self.workdir, [conns], info_fd=fd),
-            [sys.executable, "-P", "-m", "pusht.zygote", str(sock)],
-            stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
-        self._sock, self._waited = sock, False
+        self._folder = _private_folder(self.state_file.parent)
+        path = self._folder / ZYGOTE_SOCKET
+        listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        ours, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_STREAM)
         try:
-            self.proc.stdin.write(token + "\n")
-            self.proc.stdin.close()
-        except OSError:          # it ended at once; ensure() notices, stop() cleans up
-            pass
+            listener.bind(str(path))
+            listener.listen(16)
+            # -P: the folder it starts in (the student's) is not put on sys.path for its own imports
+            self.proc, self.init = start_sandbox(
+                lambda fd: _check_unbound(_confinement(self.s, self.workdir, [conns], info_fd=fd), self._folder),
+                [sys.executable, "-P", "-m", "pusht.zygote", str(ready)],
+                stdin=theirs.fileno(), stdout=subprocess.DEVNULL)
+            theirs.close()
+            try:
+                socket.send_fds(ours, [b"listen"], [listener.fileno()])
+            except OSError:      # it ended at once; ensure() notices, stop() cleans up
+                pass
+        except BaseException:
+            shutil.rmtree(self._folder, ignore_errors=True)
+            self._folder = None
+            raise
+        finally:
+            for sock in (listener, ours, theirs):
+                sock.close()
+        self._ready, self._waited = ready, False
         tmp = self.state_file.with_suffix(".tmp")
         fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
         with os.fdopen(fd, "w") as f:
-            json.dump({"pid": self.proc.pid, "socket": str(sock), "token": token, "workdir": str(self.workdir),
+            json.dump({"pid": self.proc.pid, "socket": str(path), "workdir": str(self.workdir),
                        "init": self.init and self.init.pid, "pidns": self.init and self.init.pidns,
                        "init_started": self.init and self.init.started}, f)
         os.replace(tmp, self.state_file)
 
     def _wait_listening(self) -> None:
-        # the factory listens once it has imported everything (its socket appears)
+        # the factory serves once it has imported everything (its READY file appears)
         if self.proc is None or self._waited:
             return
         deadline = time.monotonic() + ZYGOTE_WAIT_S
-        while not self._sock.exists() and self.proc.poll() is None and time.monotonic() < deadline:
+        while not self._ready.exists() and self.proc.poll() is None and time.monotonic() < deadline:
             time.sleep(0.05)
         self._waited = True
 
@@ -712,11 +824,16 @@ class Zygote:
     def stop(self) -> None:
         """Kill the factory's sandbox, with every process in it and no other: its PID namespace's
         init (``SandboxInit``), known from the moment bwrap made it, so a sandbox still being set
-        up dies whole too. Returns once everything in it is gone."""
+        up dies whole too. Returns once everything in it is gone, and its socket with it."""
         self.state_file.unlink(missing_ok=True)
         if self.proc is not None:
             end_sandbox(self.proc, self.init)
         self.proc, self.init = None, None
+        if self._folder is not None:
+            shutil.rmtree(self._folder, ignore_errors=True)
+            self._folder = None
+        if self._ready is not None:
+            _remove(self._ready)
 
 
 if __name__ == "__main__":

@@ -1,56 +1,45 @@
-"""What the autograder runs inside a student's kernel: probes that record raw numbers, nothing else.
+"""The hidden tests' probes: inputs built from the grader's specs, the raw numbers that came out.
 
-A hidden test that asserts inside the student's kernel can be fooled by the student's own code
-(patch ``torch.allclose``, replace the reference, return an always-equal object, hide the error).
-So while grading, a test cell only calls ::
+A hidden test that asserts inside the student's kernel can be fooled by the student's own code,
+and so can anything the kernel writes for the grader to read later. So the kernel's run of a
+notebook decides no verdict. Once a notebook is handed in, the grader (``autograde/probe.py``)
+takes the definitions of the notebook's cells above each test cell and runs them, with the probe
+cases and a fresh random ``nonce`` the grader chose, in a process it started itself: a sandbox of
+its own (``pusht.probe_server``) in which this package's implementations of the exercises are
+absent (their bodies replaced, ``reference`` below). The raw numbers come back over a pipe, and
+the grader compares them with the same probes run on the real implementations in its own
+process (``autograde/checks.py``).
 
-    submit("reward_impl_tests", reward_from_obs)
+Outside that process, ``submit`` (the last line of each hidden test cell) does nothing, so
+learners never notice it; while nbgrader grades, it prints one line that the feedback page
+replaces with the verdict.
 
-which reads the probe cases the grader wrote to ``$PUSHT_GRADING_DIR/cases/<test>.json``, calls the
-student's function on each, and saves what came back (plain float arrays, shapes, gradients, error
-messages) to ``$PUSHT_GRADING_DIR/results/<test>.npz``. The verdict is made afterwards, outside
-the kernel, by the grader's own process: it runs the SAME probes on the package's reference
-implementation and compares the arrays (``autograde/checks.py``). Nothing the student's code does
-in the kernel can change the reference numbers, and an object that is not a plain array of numbers
-cannot be saved at all.
-
-Outside grading (``PUSHT_GRADING_DIR`` unset), ``submit`` does nothing, so learners never notice it.
-
-The chapter's reference implementations of the exercises (``reward_from_obs``, ``lambda_return``,
-``actor_critic_losses``, ``dream``, ``block_disagreement``) are marked ``@reference``: during a
-probe they refuse to run, so a submission that merely delegates to the package's own
-implementation produces no numbers (and the grader's static check of the student's source says
-why it earns no credit).
+The chapter's implementations of the exercises (``reward_from_obs``, ``lambda_return``,
+``actor_critic_losses``, ``dream``, ``block_disagreement``) are marked ``@reference``; the grader
+finds them by that mark (``autograde/stripped.py``) and ships the probe process a copy of the
+package in which each of them only raises ``ReferenceRefused``.
 """
 
 from __future__ import annotations
 
-import functools
+import base64
 import json
 import os
 import sys
-from pathlib import Path
 
-_PROBING = False           # True only while submit() runs a student's function
+MAX_RESULTS = 4 << 20      # bytes of encoded results: far more than any test's probes give
 
 
 class ReferenceRefused(RuntimeError):
-    """The package's reference implementation of an exercise was called during grading."""
+    """The package's implementation of an exercise was called where the grader had removed it."""
 
 
 def reference(exercise: str):
-    """Mark a package function as the reference implementation of ``exercise``."""
-    def wrap(fn):
-        @functools.wraps(fn)
-        def guarded(*args, **kwargs):
-            if _PROBING:
-                raise ReferenceRefused(
-                    f"{fn.__module__}.{fn.__name__} is the package's own solution to {exercise}; "
-                    f"while grading, your function must compute the result itself")
-            return fn(*args, **kwargs)
-        guarded.__pusht_reference__ = exercise
-        return guarded
-    return wrap
+    """Mark a package function as the implementation of ``exercise`` (the function is unchanged)."""
+    def mark(fn):
+        fn.__pusht_reference__ = exercise
+        return fn
+    return mark
 
 
 # --- building the probe inputs (the grader builds exactly the same ones in its own process) -------
@@ -59,12 +48,12 @@ def _torch():
     return torch
 
 
-def build_arg(spec, fresh: int):
+def build_arg(spec, fresh: int, helpers: dict | None = None):
     """One argument of a probe call from its JSON spec.
 
     ``{"agent": {"seed", "state", "hidden"}}`` a freshly seeded ``ActorCritic``;
-    ``{"fn": "lambda_return"}`` the chapter's lambda-return (not refused while probing: an
-    exercise may build on it); ``{"t": nested list}`` a float32 tensor; ``{"randn": shape, "seed": s}`` standard normal from
+    ``{"fn": name}`` the function ``helpers[name]`` (the chapter's lambda-return, which the losses
+    exercise is given: the grader sends its source to that probe alone); ``{"t": nested list}`` a float32 tensor; ``{"randn": shape, "seed": s}`` standard normal from
     ``torch.Generator().manual_seed(s)`` (``"fresh": true`` adds the per-run random ``fresh`` to
     the seed, so inputs cannot be known in advance); ``{"rand": shape, "seed": s, "lo", "hi"}``
     uniform; ``"grad": true`` makes it a leaf that requires grad. Numbers pass through.
@@ -78,9 +67,10 @@ def build_arg(spec, fresh: int):
         a = spec["agent"]
         torch.manual_seed(int(a["seed"]))
         return ActorCritic(int(a["state"]), 2, int(a["hidden"]))
-    if spec.get("fn") == "lambda_return":   # the chapter's return, usable while probing
-        from .imagination import lambda_return
-        return lambda_return.__wrapped__
+    if "fn" in spec:                      # a function the grader hands the probe (``helpers``)
+        if spec["fn"] not in (helpers or {}):
+            raise ValueError(f"this probe needs the function {spec['fn']!r}, which it was not given")
+        return helpers[spec["fn"]]
     if "t" in spec:
         x = torch.tensor(spec["t"], dtype=torch.float32)
     else:
@@ -135,7 +125,7 @@ def _dream_models(case):
     return wm, policy, obs0, seen
 
 
-def probe(case: dict, fn, fresh: int = 0) -> dict:
+def probe(case: dict, fn, fresh: int = 0, helpers: dict | None = None) -> dict:
     """Run one probe case on ``fn``; returns {name: float64 array} (or raises what ``fn`` raised).
 
     Kinds: ``call`` (the outputs, and every tensor argument after the call, to catch in-place
@@ -151,7 +141,7 @@ def probe(case: dict, fn, fresh: int = 0) -> dict:
     out: dict = {}
     kind = case["kind"]
     if kind in ("call", "grad"):
-        args = [build_arg(a, fresh) for a in case["args"]]
+        args = [build_arg(a, fresh, helpers) for a in case["args"]]
         with torch.enable_grad():
             result = _outputs(fn(*args))
             if kind == "grad":
@@ -203,33 +193,83 @@ def probe(case: dict, fn, fresh: int = 0) -> dict:
     raise ValueError(f"unknown probe kind {kind!r}")
 
 
-def submit(test_id: str, fn) -> None:
-    """Record ``fn``'s raw results on the grader's probe cases for ``test_id`` (grading only)."""
-    global _PROBING
-    root = os.environ.get("PUSHT_GRADING_DIR")
-    if not root:
-        return
+def run_probes(cases: list, fn, fresh: int, helpers: dict | None = None) -> list:
+    """Every case of a test on ``fn``: a list, per case, of {name: float64 array} or the error it raised
+    (a string). A KeyboardInterrupt or SystemExit stops the cases after it (each is an error)."""
+    out = []
+    for case in cases:
+        try:
+            out.append(probe(case, fn, fresh, helpers))
+        except Exception as e:            # noqa: BLE001  the student's function raised it
+            out.append(f"{type(e).__name__}: {str(e)[:300]}")
+        except BaseException as e:        # exit, interrupt: the remaining cases are not run
+            out.append(f"{type(e).__name__}: {str(e)[:300]}")
+            out += ["not run: an earlier case stopped the function"] * (len(cases) - len(out))
+            break
+    return out
+
+
+def encode_results(results: list, setup: list = ()) -> bytes:
+    """``run_probes``'s results as bytes for the pipe: JSON, arrays as float64 bytes in base64;
+    ``setup``: what went wrong defining the function (a few lines for the learner)."""
     import numpy as np
 
-    cases = json.loads((Path(root) / "cases" / f"{test_id}.json").read_text())
-    fresh = int.from_bytes(os.urandom(3), "little")
-    saved: dict = {"fresh": np.array(float(fresh))}
-    stopped = None
-    for i, case in enumerate(cases):
-        _PROBING = True
-        try:
-            for key, value in probe(case, fn, fresh).items():
-                saved[f"c{i}.{key}"] = value
-        except BaseException as e:        # a KeyboardInterrupt from the cell timeout stops here too
-            saved[f"c{i}.error"] = np.array(f"{type(e).__name__}: {str(e)[:300]}")
-            if not isinstance(e, Exception):
-                stopped = e
-                break
-        finally:
-            _PROBING = False
-    out = Path(root) / "results"
-    out.mkdir(parents=True, exist_ok=True)
-    np.savez(out / f"{test_id}.npz", **saved)
-    if stopped is not None:
-        raise stopped
-    print(f"[graded outside this kernel] {test_id}: {len(cases)} checks recorded", file=sys.stdout)
+    def one(r):
+        if isinstance(r, str):
+            return {"error": r[:400]}
+        return {k: [list(v.shape), base64.b64encode(np.ascontiguousarray(v, dtype="<f8").tobytes()).decode()]
+                for k, v in r.items()}
+    return json.dumps({"setup": [str(x)[:400] for x in list(setup)[:5]],
+                       "results": [one(r) for r in results]}).encode()
+
+
+def decode_results(data: bytes, n_cases: int) -> tuple[list, list]:
+    """The inverse of ``encode_results``, for bytes that came from an untrusted process: (the setup
+    lines, a list of ``n_cases`` entries, each {name: float64 array} or an error string). Bytes that are too many,
+    not this format, or arrays whose size does not match their shape raise ValueError. Nothing is
+    decompressed, nothing evaluated, and no array is larger than the bytes that carried it."""
+    import numpy as np
+
+    if len(data) > MAX_RESULTS:
+        raise ValueError(f"more than {MAX_RESULTS} bytes of results")
+    try:
+        whole = json.loads(data.decode("utf-8"))
+    except (RecursionError, UnicodeDecodeError) as e:
+        raise ValueError(f"unreadable results ({type(e).__name__})") from None
+    if not isinstance(whole, dict) or not isinstance(whole.get("setup"), list):
+        raise ValueError("not the probe format")
+    setup = [str(x)[:400] for x in whole["setup"][:5]]
+    raw = whole.get("results")
+    if not isinstance(raw, list) or len(raw) != n_cases:
+        raise ValueError("not one result per case")
+    out = []
+    for r in raw:
+        if not isinstance(r, dict):
+            raise ValueError("a result is not a mapping")
+        if set(r) == {"error"}:
+            out.append(str(r["error"])[:400])
+            continue
+        arrays = {}
+        for k, v in r.items():
+            if not (isinstance(k, str) and len(k) < 64 and isinstance(v, list) and len(v) == 2
+                    and isinstance(v[0], list) and isinstance(v[1], str) and len(v[0]) <= 8
+                    and all(isinstance(d, int) and 0 <= d for d in v[0])):
+                raise ValueError("a result is not in the probe format")
+            buf = base64.b64decode(v[1], validate=True)
+            size = 1
+            for d in v[0]:
+                size *= d
+            if size * 8 != len(buf):
+                raise ValueError(f"{k}: {len(buf)} bytes for shape {tuple(v[0])}")
+            arrays[k] = np.frombuffer(buf, dtype="<f8").reshape(v[0]).astype(np.float64)
+        out.append(arrays)
+    return setup, out
+
+
+def submit(test_id: str, fn) -> None:
+    """The last line of each hidden test cell. It records nothing: the grader runs the probes on
+    ``fn``'s definition in a process of its own (see the module's doc). While nbgrader grades, it
+    prints one line, which the feedback page replaces with the verdict."""
+    if os.environ.get("NBGRADER_EXECUTION") == "autograde":
+        print(f"[graded outside this kernel] {test_id}: checked by the grader in a process of its own",
+              file=sys.stdout)

@@ -6,30 +6,61 @@ importing torch and this package before its first cell did anything (``benchmark
 grading_wallclock.txt``). The autograder (``autograde/sandbox.py``) instead starts this process
 once per student, *inside* that student's sandbox, and asks it for each notebook's kernel:
 
-    python -m pusht.zygote SOCKET < token
+    python -m pusht.zygote READY     (standard input: a Unix socket that brings the listening socket)
 
 It imports what the chapter's notebooks import (and nothing runs: no torch op, no thread, no
-event loop, so forking stays safe), listens on the Unix socket ``SOCKET``, and for every request
-that carries the token it read from its standard input, forks. The child is an ordinary
-ipykernel on the request's connection file, working folder and standard streams, with its own
-random seeds; the parent watches the request's socket, and when the kernel exits, or the
-requester hangs up (its kernel was shut down), it kills the kernel and every other process left
-in the sandbox, so nothing one notebook started lives on into the next, as when each notebook had
-a sandbox of its own. One kernel at a time: a new request first ends the last one.
+event loop, so forking stays safe), creates the file ``READY`` (the grader waits for it), and for
+every request on its listening socket forks. The child is an ordinary ipykernel on the request's
+connection file, working folder and standard streams, with its own random seeds; the parent
+watches the request's connection, and when the kernel exits, or the requester hangs up (its kernel
+was shut down), it kills the kernel and every other process left in the sandbox, so nothing one
+notebook started lives on into the next, as when each notebook had a sandbox of its own. One
+kernel at a time: a new request first ends the last one.
 
 The factory is not a way out of the sandbox: it runs inside the same one, as the same user, under
-the same limits. It makes itself non-dumpable, so a kernel it forked cannot trace it or read its
-memory, and it serves only requests that know the token, which no kernel can read.
+the same limits. What must hold is that only the grader can have it fork: a kernel that could
+would choose the connection file, folder and descriptors of a process it does not control. So a
+request is authenticated by *where it comes from*, never by a secret: every forked kernel starts as
+a copy of this process's memory (its stack, its heap, every frame's locals), which the student's
+code can read at leisure (``/proc/self/mem``, ``gc``, ``sys._current_frames``), so a token kept
+here, as this factory once did, is a token every kernel holds.
+
+* The listening socket is made by the grader (``sandbox.Zygote``) at a path in a private folder
+  outside everything the sandbox binds, and handed to this process as a descriptor: it arrives over
+  the Unix socket on standard input (SCM_RIGHTS) and is received before anything else runs. No
+  process in the sandbox can name that path; a kernel cannot connect to it.
+* Not as an inherited descriptor of bwrap: bwrap's own init (pid 1 of the sandbox) keeps every
+  descriptor it was started with, and where grading does not run as root that init is the
+  student's uid and dumpable, so a kernel could take a copy of any of them with ``pidfd_getfd``
+  (measured). The socket pair on standard input is all that init holds, drained and closed at the
+  grader's end before any kernel exists.
+* Each forked kernel closes the listening socket, the requester's connection and the selector, and
+  any other socket it inherited, before the first line of ipykernel runs.
+* This process is not dumpable (``PR_SET_DUMPABLE`` 0, first thing): a kernel, of the same uid but
+  without capabilities, can neither trace it, nor read its memory, nor list or copy its descriptors
+  (``/proc/<pid>/fd``, ``pidfd_getfd``). A forked kernel makes itself dumpable again once the
+  factory's descriptors are gone, as a freshly started kernel is (``/proc/self``, debuggers and
+  torch's own introspection work as before).
+* And a second check on every connection: the peer's credentials (``SO_PEERCRED``). The kernel
+  reports a peer's pid as seen from this process's PID namespace, and a process outside the
+  sandbox's namespace has no pid there: it reads 0. Every process in the sandbox (a kernel, its
+  children, those of a nested namespace) reads as its nonzero pid, even after it has exited. So a
+  connection whose peer pid is not 0 is refused, whatever it sends.
+
+Peer credentials alone would not do: the path would then have to be in a folder the sandbox sees
+(the socket folder is writable there, kernels' own sockets live in it), and a kernel could replace
+the socket with its own, receive the next request and answer it.
 """
 
 from __future__ import annotations
 
 import json
 import os
-import secrets
 import selectors
 import signal
 import socket
+import stat
+import struct
 import sys
 import time
 
@@ -100,17 +131,37 @@ def _reap() -> dict:
         done[pid] = os.waitstatus_to_exitcode(status)
 
 
-def _child(request: dict, fds: list[int], listener: socket.socket, conn: socket.socket) -> None:
-    """In the forked child: become the notebook's kernel. Never returns."""
+def _close_sockets_but_stdio() -> None:
+    """Close every socket this process holds but its standard streams: a kernel keeps nothing of
+    the factory's (the named ones are closed by name first; this is the backstop)."""
     try:
-        listener.close()
-        conn.close()
-        _prctl_dumpable(1)                       # an ordinary process again, as a fresh kernel is
+        names = os.listdir("/proc/self/fd")
+    except OSError:                # no /proc: the named ones are closed all the same
+        return
+    for name in names:
+        fd = int(name)
+        if fd <= 2:
+            continue
+        try:
+            if stat.S_ISSOCK(os.fstat(fd).st_mode):
+                os.close(fd)
+        except OSError:            # the listing's own descriptor, already closed
+            pass
+
+
+def _child(request: dict, fds: list[int], factory: list) -> None:
+    """In the forked child: become the notebook's kernel. Never returns. ``factory``: the
+    factory's listening socket, selector and the requester's connection, closed first."""
+    try:
+        for thing in factory:
+            thing.close()
         for target, fd in zip((0, 1, 2), fds):
             os.dup2(fd, target)
         for fd in fds:
             if fd > 2:
                 os.close(fd)
+        _prctl_dumpable(1)                       # an ordinary process again, as a fresh kernel is
+        _close_sockets_but_stdio()
         os.chdir(request["cwd"])
         sys.path.insert(0, os.getcwd())           # as ``python -m ipykernel_launcher`` run there has it
         signal.signal(signal.SIGCHLD, signal.SIG_DFL)
@@ -138,19 +189,50 @@ def _child(request: dict, fds: list[int], listener: socket.socket, conn: socket.
     os._exit(code)
 
 
-def serve(path: str, token: str) -> None:
-    """Listen on ``path``; fork one kernel per authenticated request (see the module doc)."""
-    _prctl_dumpable(0)
-    listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+def peer_pid(conn: socket.socket) -> int:
+    """The pid of the process that connected ``conn``, as this PID namespace numbers it: 0 for a
+    process outside it (the grader's launcher), never 0 for one inside (``SO_PEERCRED``)."""
+    pid, _uid, _gid = struct.unpack("3i", conn.getsockopt(socket.SOL_SOCKET, socket.SO_PEERCRED, 12))
+    return pid
+
+
+def _read_request(conn: socket.socket) -> tuple[dict | None, list[int]]:
+    """The request on ``conn`` and the three descriptors that came with it, or (None, []) (the
+    descriptors closed) if it is not one: not from outside the sandbox, not well formed, or its
+    requester already gone."""
+    fds: list[int] = []
     try:
-        os.unlink(path)
-    except FileNotFoundError:
-        pass
-    listener.bind(path)
-    os.chmod(path, 0o600)
-    listener.listen(4)
+        if peer_pid(conn) != 0:                  # from inside the sandbox: a kernel
+            return None, []
+        msg, fds, _, _ = socket.recv_fds(conn, MAX_REQUEST, 3)
+        request = json.loads(msg.decode())
+        ok = (isinstance(request, dict) and len(fds) == 3
+              and all(isinstance(request.get(k), str) for k in ("connection_file", "cwd")))
+        if ok:
+            conn.setblocking(False)
+            try:                                 # b"" here: the requester gave up and hung up
+                ok = conn.recv(1, socket.MSG_PEEK) != b""
+            except BlockingIOError:              # nothing more to read: it waits for its answer
+                pass
+    except (OSError, ValueError, UnicodeDecodeError):
+        ok = False
+    if ok:
+        return request, fds
+    for fd in fds:
+        os.close(fd)
+    return None, []
+
+
+def serve(listener: socket.socket, ready: str | None = None) -> None:
+    """Fork one kernel per request on ``listener`` (see the module doc); create the file ``ready``
+    once listening."""
     sel = selectors.DefaultSelector()
     sel.register(listener, selectors.EVENT_READ)
+    if ready:
+        try:
+            os.close(os.open(ready, os.O_WRONLY | os.O_CREAT | os.O_NOFOLLOW | os.O_NONBLOCK, 0o644))
+        except OSError as e:       # the grader waits for it in vain, then finds it served all the same
+            print(f"pusht.zygote: cannot create {ready}: {e}", file=sys.stderr)
     kernel: tuple[int, socket.socket] | None = None     # (pid, the requester's connection)
 
     def end(kernel, code):
@@ -170,19 +252,13 @@ def serve(path: str, token: str) -> None:
     while True:
         for key, _ in sel.select(timeout=0.05):
             if key.fileobj is listener:
-                conn, _ = listener.accept()
-                conn.settimeout(10)
                 try:
-                    msg, fds, _, _ = socket.recv_fds(conn, MAX_REQUEST, 3)
-                    request = json.loads(msg.decode())
-                    given = request.get("token") if isinstance(request, dict) else None
-                    ok = (isinstance(given, str) and secrets.compare_digest(given.encode(), token.encode())
-                          and len(fds) == 3)
-                except (OSError, ValueError, UnicodeDecodeError):
-                    ok, fds = False, []
-                if not ok:
-                    for fd in fds:
-                        os.close(fd)
+                    conn, _ = listener.accept()
+                except OSError:
+                    continue
+                conn.settimeout(10)
+                request, fds = _read_request(conn)
+                if request is None:
                     conn.close()
                     continue
                 if kernel is not None:                # one kernel at a time
@@ -190,13 +266,17 @@ def serve(path: str, token: str) -> None:
                     kernel = None
                 pid = os.fork()
                 if pid == 0:
-                    _child(request, fds, listener, conn)
+                    _child(request, fds, [listener, sel, conn])
                 for fd in fds:
                     os.close(fd)
-                conn.settimeout(None)
-                conn.sendall(f"pid {pid}\n".encode())
                 sel.register(conn, selectors.EVENT_READ)
                 kernel = (pid, conn)
+                try:
+                    conn.settimeout(None)
+                    conn.sendall(f"pid {pid}\n".encode())
+                except OSError:                        # the requester is gone: so is its kernel
+                    end(kernel, -9)
+                    kernel = None
             elif kernel is not None and key.fileobj is kernel[1]:
                 try:
                     data = kernel[1].recv(64)
@@ -211,20 +291,41 @@ def serve(path: str, token: str) -> None:
             kernel = None
 
 
+def receive_listener(channel_fd: int = 0) -> socket.socket:
+    """The listening socket the grader sends over the Unix socket ``channel_fd`` (SCM_RIGHTS)."""
+    channel = socket.socket(fileno=os.dup(channel_fd))
+    try:
+        channel.settimeout(30)
+        _, fds, _, _ = socket.recv_fds(channel, 16, 1)
+    finally:
+        channel.close()
+    if len(fds) != 1:
+        raise ValueError("no listening socket came on standard input")
+    listener = socket.socket(fileno=fds[0])
+    if (listener.family != socket.AF_UNIX or listener.type != socket.SOCK_STREAM
+            or not listener.getsockopt(socket.SOL_SOCKET, socket.SO_ACCEPTCONN)):
+        listener.close()
+        raise ValueError("what came on standard input is not a listening Unix socket")
+    return listener
+
+
 def main(argv=None) -> int:
+    _prctl_dumpable(0)                   # before anything else: no kernel may ever read or trace this
     argv = sys.argv[1:] if argv is None else argv
     if len(argv) != 1:
-        print("usage: python -m pusht.zygote SOCKET  (the token on standard input)", file=sys.stderr)
+        print("usage: python -m pusht.zygote READY  (standard input: a Unix socket bringing the "
+              "listening socket)", file=sys.stderr)
         return 2
-    token = sys.stdin.readline().strip()
-    if not token:
-        print("pusht.zygote: no token on standard input", file=sys.stderr)
+    try:
+        listener = receive_listener(0)
+    except (OSError, ValueError) as e:
+        print(f"pusht.zygote: {e}", file=sys.stderr)
         return 2
     devnull = os.open(os.devnull, os.O_RDONLY)
     os.dup2(devnull, 0)
     os.close(devnull)
     preload()
-    serve(argv[0], token)
+    serve(listener, argv[0])
     return 0
 
 

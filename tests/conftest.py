@@ -63,22 +63,6 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
         terminalreporter.write_line(pytest_report_header(config))
 
 
-@pytest.fixture
-def grading_dir(tmp_path, monkeypatch):
-    """A grading folder holding every hidden test's probe cases, as the grader writes it, and
-    ``PUSHT_GRADING_DIR`` pointing at it (so ``pusht.grading.submit`` records results there)."""
-    import json
-
-    sys.path.insert(0, str(ROOT / "autograde"))
-    import checks
-
-    (tmp_path / "cases").mkdir()
-    for t in checks.TESTS.values():
-        (tmp_path / "cases" / f"{t.test_id}.json").write_text(json.dumps([c.spec for c in t.cases]))
-    monkeypatch.setenv("PUSHT_GRADING_DIR", str(tmp_path))
-    return tmp_path
-
-
 def running_as(uids) -> list:
     """(pid, the start of its command line) of every process whose real uid is in ``uids``, read from
     /proc directly: a test that checks the sandbox cleaned up must not ask the code under test."""

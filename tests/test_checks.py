@@ -1,31 +1,25 @@
-"""The hidden tests' judge, without nbgrader: what a test cell records in the kernel
-(``pusht.grading.submit``) and how the grader's own process rules on it (``autograde/checks.py``).
+"""The hidden tests' judge, without nbgrader: the probes' raw numbers (``pusht.grading``, run here
+in this process) and how the grader rules on them (``autograde/checks.py``).
 
-The solution notebooks' implementations pass every case; a wrong one, one that returns
-always-equal objects, and one that delegates to the package's reference all fail.
+The solution notebooks' implementations pass every case; a wrong one and one that returns
+always-equal objects fail. (That the package's own implementations cannot be reached where
+students' functions are probed is ``tests/test_probe.py``'s.)
 """
 
-import json
 import math
 import sys
 from pathlib import Path
 
-import pytest
 import torch
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "autograde"))
 
 import checks  # noqa: E402
-import pusht.evaluate as ev  # noqa: E402
-import pusht.grading as grading  # noqa: E402
-from pusht.ensemble import block_disagreement as package_disagreement  # noqa: E402
-from pusht.reward import reward_from_obs as package_reward  # noqa: E402
 
 
-def verdict(grading_dir, test, fn):
-    grading.submit(test.test_id, fn)
-    return checks.judge(test, grading_dir / "results" / f"{test.test_id}.npz")
+def verdict(test, fn):
+    return checks.judge(test, checks.probe_in_process(test, fn))
 
 
 def reward(norm_obs, mean, std):
@@ -67,56 +61,46 @@ def block_disagreement(frames, std):
     return torch.where(var > 0, var.clamp_min(1e-30).sqrt(), torch.zeros_like(var))
 
 
-def test_correct_implementations_pass_every_case(grading_dir):
+def test_correct_implementations_pass_every_case():
     for test, fn in ((checks.REWARD, reward), (checks.LAMBDA, lambda_return), (checks.DREAM, dream),
                      (checks.DISAGREE, block_disagreement)):
-        v = verdict(grading_dir, test, fn)
+        v = verdict(test, fn)
         assert v.passed, (test.test_id, v.message)
 
 
-def test_a_wrong_reward_fails_with_a_hint(grading_dir):
-    v = verdict(grading_dir, checks.REWARD, reward_acos)
+def test_a_wrong_reward_fails_with_a_hint():
+    v = verdict(checks.REWARD, reward_acos)
     assert not v.passed and "first failure" in v.message
 
 
-def test_always_equal_objects_record_nothing_that_passes(grading_dir):
+def test_always_equal_objects_record_nothing_that_passes():
     class Yes(float):
         def __eq__(self, other):
             return True
 
-    v = verdict(grading_dir, checks.REWARD, lambda *a: (Yes(0.0), Yes(0.0), Yes(0.0)))
+    v = verdict(checks.REWARD, lambda *a: (Yes(0.0), Yes(0.0), Yes(0.0)))
     assert not v.passed
 
 
-def test_the_package_reference_refuses_to_run_inside_a_probe(grading_dir):
-    for test, fn in ((checks.REWARD, package_reward), (checks.REWARD, lambda *a: package_reward(*a)),
-                     (checks.DREAM, lambda *a: ev.dream(*a)), (checks.DISAGREE, package_disagreement)):
-        v = verdict(grading_dir, test, fn)
-        assert not v.passed and "package's own solution" in v.message
-    assert package_reward(torch.zeros(6), torch.zeros(6), torch.ones(6))[0] == 0   # outside: as usual
-
-
-def test_missing_results_and_delegation_earn_nothing(grading_dir):
-    assert not checks.judge(checks.REWARD, grading_dir / "nothing.npz").passed
-    v = checks.judge(checks.REWARD, "", delegation=["cell 3, line 1: from pusht.reward import reward_from_obs"])
+def test_missing_results_and_delegation_earn_nothing():
+    assert not checks.judge(checks.REWARD, None).passed
+    for status in ("timeout", "toolarge", "the probe process failed (EOFError)"):
+        assert not checks.judge(checks.REWARD, {"fresh": 1, "status": status, "setup": [], "results": None}).passed
+    v = checks.judge(checks.REWARD, None, delegation=["cell 3, line 1: from pusht.reward import reward_from_obs"])
     assert not v.passed and "write it yourself" in v.message
 
 
-def test_verdicts_judged_in_several_threads_at_once_are_the_verdicts_judged_alone(grading_dir):
+def test_verdicts_judged_in_several_threads_at_once_are_the_verdicts_judged_alone():
     # grade_task judges in its own process, and several tasks finish in threads of one process; the
     # reference probes seed torch's global generator, so judgements must not interleave
-    import base64
     from concurrent.futures import ThreadPoolExecutor
 
     import grade
 
-    grading.submit(checks.DREAM.test_id, dream)
-    raw = base64.b64encode((grading_dir / "results" / f"{checks.DREAM.test_id}.npz").read_bytes()).decode()
+    raw = checks.probe_in_process(checks.DREAM, dream, fresh=77)
 
     def judged(_):
-        results = {"04.ipynb": {"results": {checks.DREAM.test_id: raw}}}
-        grade.judge_results(results)
-        return results["04.ipynb"]["verdicts"][checks.DREAM.test_id]["message"]
+        return grade.judge_locked(checks.DREAM, raw)["message"]
 
     torch.manual_seed(123)
     expected = torch.rand(3)

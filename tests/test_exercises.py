@@ -4,8 +4,9 @@ fail the hidden ones, with a hint; delegating to the package's own implementatio
 with a message saying why.
 
 The visible tests are the notebook's own test cell (its hidden block stripped), executed on the
-candidate; the hidden verdict is ``pusht.grading.submit`` in this process plus
-``autograde/checks.judge``, exactly what grading runs around a student's kernel.
+candidate; the hidden verdict is the probes run in this process (``checks.probe_in_process``)
+and ``autograde/checks.judge``, what grading runs in its probe process (where the package's own
+implementations are absent: ``tests/test_probe.py``).
 """
 
 import json
@@ -22,7 +23,6 @@ sys.path.insert(0, str(ROOT / "autograde"))
 
 import checks  # noqa: E402
 import delegation  # noqa: E402
-import pusht.grading as grading  # noqa: E402
 from pusht.agent import ActorCritic  # noqa: E402
 from pusht.config import make_config  # noqa: E402
 from pusht.evaluate import policy_of  # noqa: E402
@@ -53,9 +53,8 @@ def solution(notebook: str, grade_id: str, name: str, **extra):
     return ns[name]
 
 
-def hidden(grading_dir, test, fn):
-    grading.submit(test.test_id, fn)
-    return checks.judge(test, grading_dir / "results" / f"{test.test_id}.npz")
+def hidden(test, fn):
+    return checks.judge(test, checks.probe_in_process(test, fn))
 
 
 def run_visible(notebook, test_id, **functions):
@@ -168,77 +167,73 @@ def _with_return(fn, default_return):
 
 
 # --- the exercises ------------------------------------------------------------------------------------
-def test_lambda_return(grading_dir):
+def test_lambda_return():
     test = checks.LAMBDA
     good = solution("03_imagination_actor", "lambda_return_impl", "lambda_return")
     run_visible("03_imagination_actor", "lambda_return_impl_tests", lambda_return=good)
-    assert hidden(grading_dir, test, good).passed
+    assert hidden(test, good).passed
     for wrong, hint in ((lambda_return_detached_values, "flows into the values"),
                         (lambda_return_floats, "gradient")):
         run_visible("03_imagination_actor", "lambda_return_impl_tests", lambda_return=wrong)
-        v = hidden(grading_dir, test, wrong)
+        v = hidden(test, wrong)
         assert not v.passed and hint in v.message, v.message
 
 
-def test_actor_critic_losses(grading_dir):
+def test_actor_critic_losses():
     test = checks.LOSSES
     lr = solution("03_imagination_actor", "lambda_return_impl", "lambda_return")
     good = solution("03_imagination_actor", "losses_impl", "actor_critic_losses", lambda_return=lr)
     run_visible("03_imagination_actor", "losses_impl_tests", actor_critic_losses=good)
-    assert hidden(grading_dir, test, good).passed
+    assert hidden(test, good).passed
     from pusht.imagination import page_losses
 
     page = _with_return(page_losses, lr)       # the chapter page's wiring, as a learner would write it
     for wrong, hint in ((page, "page's wiring"), (_with_return(losses_critic_steals, lr), "imagined states"),
                         (_with_return(losses_moving_target, lr), "no gradient")):
         run_visible("03_imagination_actor", "losses_impl_tests", actor_critic_losses=wrong)
-        v = hidden(grading_dir, test, wrong)
+        v = hidden(test, wrong)
         assert not v.passed and hint in v.message, v.message
 
 
-def test_dream(grading_dir):
+def test_dream():
     test = checks.DREAM
     good = solution("04_imagination_gap", "dream_impl", "dream")
     run_visible("04_imagination_gap", "dream_impl_tests", dream=good)
-    assert hidden(grading_dir, test, good).passed
+    assert hidden(test, good).passed
     for wrong in (dream_refilters, dream_stale_latent):
         run_visible("04_imagination_gap", "dream_impl_tests", dream=wrong)
-        v = hidden(grading_dir, test, wrong)
+        v = hidden(test, wrong)
         assert not v.passed and "first failure" in v.message, v.message
 
 
 @pytest.mark.filterwarnings("ignore:var\\(\\)")      # the sample variance of one member
-def test_block_disagreement(grading_dir):
+def test_block_disagreement():
     test = checks.DISAGREE
     nb, tests_id = "06_closing_the_gap", "block_disagreement_impl_tests"
     good = solution(nb, "block_disagreement_impl", "block_disagreement")
     run_visible(nb, tests_id, block_disagreement=good)
-    assert hidden(grading_dir, test, good).passed
+    assert hidden(test, good).passed
     for wrong, hint in ((disagreement_sample_variance, "POPULATION variances"),
                         (disagreement_normalised_units, "in metres"),
                         (disagreement_std_not_squared, "std squared"),
                         (disagreement_all_dims, "only the block centre"),
                         (disagreement_plain_root, "not NaN")):
         run_visible(nb, tests_id, block_disagreement=wrong)
-        v = hidden(grading_dir, test, wrong)
+        v = hidden(test, wrong)
         assert not v.passed and hint in v.message, (wrong.__name__, v.message)
     with pytest.raises(AssertionError, match="carry gradient"):   # the visible tests catch this one
         run_visible(nb, tests_id, block_disagreement=disagreement_detached)
-    assert "not differentiable" in hidden(grading_dir, test, disagreement_detached).message
+    assert "not differentiable" in hidden(test, disagreement_detached).message
 
 
 @pytest.mark.parametrize("test", list(checks.TESTS.values()), ids=list(checks.TESTS))
-def test_delegating_to_the_package_earns_nothing_and_says_why(grading_dir, test):
+def test_delegating_to_the_package_earns_nothing_and_says_why(test):
     module, name = test.reference.split(":")
     src = f"from {module} import {name} as _theirs\n\ndef {test.function}(*args, **kw):\n    return _theirs(*args, **kw)\n"
     found = delegation.delegations(test, [{"cell_type": "code", "source": src, "metadata": {}}]).definite
     assert found
-    v = checks.judge(test, grading_dir / "results" / "none.npz", delegation=found)
+    v = checks.judge(test, None, delegation=found)
     assert not v.passed and "no credit" in v.message and "write it yourself" in v.message
-    ns = {}
-    exec(src, ns)                                       # and the probes refuse to run it anyway
-    v = hidden(grading_dir, test, ns[test.function])
-    assert not v.passed and "ReferenceRefused" in v.message
 
 
 # --- the reward (notebook 02) ----------------------------------------------------------------------------
@@ -253,12 +248,12 @@ def _reward_notebook_globals():
             "to_norm": lambda obs_m: nb02.to_norm(obs_m, MEAN, STD)}
 
 
-def test_reward(grading_dir):
+def test_reward():
     test = checks.REWARD
     g = _reward_notebook_globals()
     good = solution("02_reward", "reward_impl", "reward_from_obs", **g)
     run_visible("02_reward", "reward_impl_tests", reward_from_obs=good, **g)
-    assert hidden(grading_dir, test, good).passed
+    assert hidden(test, good).passed
     # Plausible slips the visible tests cannot see: the notebook's own MEAN or STD used in place of
     # the arguments (the visible tests pass exactly those; the grader passes others).
     source = cell("02_reward", "reward_impl")
@@ -267,5 +262,5 @@ def test_reward(grading_dir):
         exec(source.replace("obs = norm_obs * std + mean", wrong_line), ns)
         wrong = ns["reward_from_obs"]
         run_visible("02_reward", "reward_impl_tests", reward_from_obs=wrong, **g)
-        v = hidden(grading_dir, test, wrong)
+        v = hidden(test, wrong)
         assert not v.passed and "first failure" in v.message, v.message

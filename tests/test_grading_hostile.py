@@ -169,6 +169,89 @@ def test_unusual_uploads_and_ids(hostile):
     assert "perfect" in report and scores(course, "perfect", "02_reward")["reward_impl_tests"] == 4
 
 
+def test_results_a_kernel_forges_or_rebinds_earn_nothing(hostile):
+    # the verdicts come from the probe process (autograde/probe.py): what a kernel writes is not read
+    _, report, _, _ = hostile
+    for s in ("forgeresults", "stackref", "probekill"):
+        assert report[s]["verdicts"]["reward_impl_tests"][0] == 0, report[s]["verdicts"]
+    assert "ReferenceRefused" in report["stackref"]["verdicts"]["reward_impl_tests"][2]
+
+
+def test_a_copy_of_the_answer_key_keeps_its_points_and_is_flagged(hostile):
+    _, report, _, _ = hostile
+    assert any("answer key, for the instructor" in n and "pusht.reward.reward_from_obs" in n
+               for n in report["answerkey"]["notes"]), report["answerkey"]["notes"]
+    assert report["answerkey"]["verdicts"]["reward_impl_tests"][0] == 4
+
+
+def test_no_file_outside_a_sandbox_changes_and_the_course_holds_only_what_the_grader_wrote(hostile):
+    import os
+    import stat
+
+    course, report, token, tmp = hostile
+    assert (course / "instructor_only.txt").read_text() == f"CANARY {token}\n"
+    assert "LINKFARM made" in outputs(course, "linkfarm")
+    for root, dirs, files in os.walk(course):
+        for name in dirs + files:
+            st = os.lstat(os.path.join(root, name))
+            assert stat.S_ISREG(st.st_mode) or stat.S_ISDIR(st.st_mode), os.path.join(root, name)
+    for student in ("linkfarm", "diskfill", "forgeresults"):
+        left = {p.name for p in (course / "autograded" / student / grade.ASSIGNMENT).iterdir()}
+        assert left <= {"02_reward.ipynb", "timestamp.txt"}, (student, left)
+    assert (course / "feedback" / "linkfarm" / grade.ASSIGNMENT / "02_reward.html").is_file()
+
+
+def test_one_poisoned_student_leaves_every_other_students_outputs_intact(hostile):
+    course, report, _, _ = hostile
+    for name in ("grades.csv", "report.csv", "gradebook.db"):
+        assert (course / name).is_file()
+    for s in report:
+        graded = course / "autograded" / s / grade.ASSIGNMENT
+        for nb in graded.glob("*.ipynb") if graded.is_dir() else []:
+            assert (course / "feedback" / s / grade.ASSIGNMENT / f"{nb.stem}.html").is_file() or \
+                any("no feedback pages" in n or "larger than" in n for n in report[s]["notes"]), (s, nb.name)
+
+
+def test_disk_and_tmpfs_use_is_capped(hostile):
+    import re
+
+    course, _, _, _ = hostile
+    out = outputs(course, "diskfill")
+    full = {w: int(mb) for w, mb in re.findall(r"FULL (\S+) (\d+) MB", out)}
+    assert set(full) == {".", "/tmp"}, out[-500:]
+    assert full["."] <= sandbox.DEFAULT_LIMITS["work_bytes"] >> 20
+    assert full["/tmp"] <= sandbox.DEFAULT_LIMITS["tmp_bytes"] >> 20
+
+
+def test_the_graders_memory_stays_bounded_whatever_a_kernel_prints(hostile):
+    import resource
+
+    course, report, _, _ = hostile
+    # the flood ran into the worker's memory cap or the cell timeout; either way only its own notebook
+    # is touched, and its reward test keeps the points its function earns
+    assert report["flood"]["verdicts"]["reward_impl_tests"][0] == 4
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss << 10          # bytes (Linux reports KiB)
+    assert peak < 3 << 30, peak
+
+
+def test_feedback_pages_hold_no_script(hostile):
+    from html.parser import HTMLParser
+
+    course, _, _, _ = hostile
+    found = []
+
+    class Scan(HTMLParser):
+        def handle_starttag(self, tag, attrs):
+            if tag in ("script", "iframe", "object", "embed", "base"):
+                found.append(tag)
+            found.extend(f"{tag}[{k}]" for k, v in attrs if k.startswith("on") or "javascript:" in (v or "").lower())
+
+    page = (course / "feedback" / "xss" / grade.ASSIGNMENT / "02_reward.html").read_text()
+    Scan().feed(page)
+    assert not found, found
+    assert "Content-Security-Policy" in page
+
+
 def test_without_a_sandbox_grading_runs_and_warns(tmp_path, monkeypatch):
     import zipfile
 

@@ -56,7 +56,7 @@ def test_a_stage_trained_with_the_learners_function_is_never_cached_so_never_sha
     stage = world_model_stage(cfg, cache_dir=tmp_path, model_cache=tmp_path, log=None)
 
     def my_return(*args, **kwargs):            # a learner's lambda-return (here the same numbers)
-        return lambda_return.__wrapped__(*args, **kwargs)
+        return lambda_return(*args, **kwargs)
 
     agent_stage(cfg, stage, model_cache=tmp_path, log=None, return_fn=my_return)
     assert not any(n.startswith("agent_") for n in files(tmp_path))

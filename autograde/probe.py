@@ -1,0 +1,272 @@
+"""Verdict inputs from a process no student kernel ever touched.
+
+The kernel that runs a hand-in is the student's: anything it writes, prints or leaves behind can be
+forged. So no verdict reads it. For each hidden test, the grader instead:
+
+1. takes the hand-in's cells above the test cell, as the kernel would run them (``cellcode``), and
+   keeps what defines the graded function: every import, function and class definition, and every
+   other top-level statement that binds a name the function needs, directly or through what it
+   needs (``program``): no training, no plotting, no experiment;
+2. chooses a fresh nonce (``secrets``) that seeds the cases' random inputs;
+3. sends the statements, the cases and the nonce to a probe server (``pusht.probe_server``) that
+   it started itself in a sandbox of its own (bubblewrap, no network, the student's leased uid,
+   the same limits as a kernel, a private size-capped ``/tmp``), with the package bound in a copy
+   whose exercise implementations only raise (``stripped.py``); the server forks a child per test
+   that defines the function and runs the cases;
+4. reads the child's numbers back over a pipe, at most ``pusht.grading.MAX_RESULTS`` bytes, within
+   the time limit, and decodes them without decompressing or evaluating anything;
+5. judges them against the same cases run on the real implementations in its own process
+   (``checks.judge``).
+
+What this proves: the numbers judged are what the hand-in's own definitions return on inputs they
+could not know in advance, computed where the package's answers do not exist. What it does not
+prove: that the function the student wrote is the one the kernel ran (a notebook that redefines
+it only at run time, with ``exec`` of a downloaded string or a ``%%writefile`` module, is judged
+on what its cells define, and loses the points); that the code is the student's own (a copy of the
+answer key is flagged for the instructor by ``answer_key.py``, not zeroed); that the student did
+not compute the answer with other package functions that are not exercises.
+"""
+
+from __future__ import annotations
+
+import ast
+import inspect
+import json
+import os
+import secrets
+import select
+import subprocess
+import symtable
+import sys
+import time
+from pathlib import Path
+
+import cellcode
+import sandbox
+import stripped
+
+SETUP = (ast.Import, ast.ImportFrom, ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)
+PROBE_SECONDS = 120          # per test: defining the function and every case
+
+
+# --- what to run: the definitions above the test cell ----------------------------------------------
+def _bound(node) -> set[str]:
+    """Names a top-level statement binds (not inside functions, classes or lambdas it defines)."""
+    if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+        return {node.name}
+    out, todo = set(), [node]
+    while todo:
+        n = todo.pop()
+        if isinstance(n, (ast.Import, ast.ImportFrom)):
+            out |= {(a.asname or a.name).split(".")[0] for a in n.names}
+        elif isinstance(n, ast.Name) and isinstance(n.ctx, (ast.Store, ast.Del)):
+            out.add(n.id)
+        elif isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            out.add(n.name)
+            continue
+        elif isinstance(n, ast.Lambda):
+            continue
+        elif isinstance(n, (ast.MatchAs, ast.MatchStar)) and n.name:
+            out.add(n.name)
+        todo.extend(ast.iter_child_nodes(n))
+    return out
+
+
+def _reads(node) -> set[str]:
+    """The global names a statement can read when it runs or when the functions it defines run:
+    its own names at the top level (defaults and decorators included), and in every function,
+    class, lambda and comprehension inside it the names that are global there, not their locals
+    (Python's own symbol tables, ``symtable``)."""
+    try:
+        table = symtable.symtable(ast.unparse(node), "<statement>", "exec")
+    except Exception:          # noqa: BLE001  cannot be read: every name it spells
+        return {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
+    out, todo = set(), [table]
+    while todo:
+        t = todo.pop()
+        top = t.get_type() == "module"
+        out |= {s.get_name() for s in t.get_symbols() if s.is_referenced() and (top or s.is_global())}
+        todo.extend(t.get_children())
+    return out
+
+
+def test_cell_index(cells, test_id: str) -> int | None:
+    for i, cell in enumerate(cells):
+        if cellcode.gid(cell) == test_id and cell.get("cell_type") == "code":
+            return i
+    return None
+
+
+def program(cells, test_id: str, function: str) -> list[tuple[str, str]]:
+    """[(label, statement source)] that define ``function`` as the cells above the test cell do.
+
+    Every import and definition is kept (they are cheap, and a function may reach them at run time
+    by any name); any other statement is kept where it binds a name that the function reads, or
+    that a statement it needs reads, and so on: a constant, an alias, a table, a default argument.
+    A statement that only the notebook's other code needs (training, plotting) is left out. Statements are kept in
+    notebook order, so a later definition replaces an earlier one as it did in the kernel."""
+    end = test_cell_index(cells, test_id)
+    stmts = []
+    for i, cell in enumerate(cells[:end] if end is not None else cells):
+        if cell.get("cell_type") != "code":
+            continue
+        tree = cellcode.parse(cellcode.source(cell))
+        for node in tree.body if tree is not None else []:
+            stmts.append((f"<cell {i + 1}, line {getattr(node, 'lineno', 0)}>", node))
+    setup = [isinstance(node, SETUP) for _, node in stmts]
+    bound = [_bound(node) for _, node in stmts]
+    needed = [False] * len(stmts)
+    need, changed = {function}, True
+    while changed:
+        changed = False
+        for k, (_, node) in enumerate(stmts):
+            if not needed[k] and bound[k] & need:
+                needed[k], changed = True, True
+                need |= _reads(node)
+    keep = [a or b for a, b in zip(setup, needed)]
+    out = []
+    for k, (label, node) in enumerate(stmts):
+        if keep[k]:
+            try:
+                out.append((label, ast.unparse(node)))
+            except Exception:          # noqa: BLE001  a tree unparse cannot print: the kernel could not run it
+                continue
+    return out
+
+
+def warm_statements(release) -> list[str]:
+    """The release notebooks' top-level imports: the probe server imports them once, before forking."""
+    out = []
+    for nb in release.values():
+        for cell in nb.cells:
+            if cell.get("cell_type") == "code":
+                tree = cellcode.parse(cellcode.source(cell))
+                out += [ast.unparse(n) for n in (tree.body if tree else []) if isinstance(n, (ast.Import, ast.ImportFrom))]
+    return sorted(set(out))
+
+
+def helpers_for(test) -> dict[str, str]:
+    """Source of the functions a test's cases hand to the student's function (``{"fn": name}``):
+    sent to that test's probe alone, never present anywhere else in the probe process."""
+    names = {a["fn"] for c in test.cases for a in c.spec.get("args", []) if isinstance(a, dict) and "fn" in a}
+    out = {}
+    for name in sorted(names):
+        import pusht.imagination as imagination
+
+        tree = ast.parse(inspect.getsource(getattr(imagination, name)))
+        tree.body[0].decorator_list = []
+        out[name] = ast.unparse(tree)
+    return out
+
+
+# --- where to run it: a probe server of the grader's own ----------------------------------------------
+class ProbeServer:
+    """One grading task's probe server (``pusht.probe_server``) in a sandbox of its own.
+
+    ``with ProbeServer(uid, limits, warm) as server: server.run(test, statements)``. The sandbox
+    binds nothing writable but a private ``/tmp``, and the package as ``stripped.package()``."""
+
+    def __init__(self, uid: int | None, limits: dict, warm: list[str] = (), confine: bool = True,
+                 seconds: float = PROBE_SECONDS):
+        self.uid, self.limits, self.warm, self.confine = uid, limits, list(warm), confine
+        self.seconds = seconds
+        self.proc, self.init = None, None
+
+    def __enter__(self) -> "ProbeServer":
+        self.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
+
+    def start(self) -> None:
+        program = [sys.executable, "-P", "-m", "pusht.probe_server"]
+        env = {k: os.environ[k] for k in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "MKL_CBWR") if k in os.environ}
+        env.setdefault("OMP_NUM_THREADS", "1")
+        env.setdefault("MKL_NUM_THREADS", "1")
+        env["MPLBACKEND"] = "Agg"
+        if self.confine:
+            package = stripped.package()
+            self.proc, self.init = sandbox.start_sandbox(
+                lambda fd: sandbox.bwrap_command(Path("/"), [], self.uid, limits=self.limits, env=env,
+                                                 info_fd=fd, package=package),
+                program, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, cwd="/")
+        else:        # unconfined grading (no bubblewrap): the real package, with a loud warning upstream
+            self.proc = subprocess.Popen(program, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                         stderr=subprocess.DEVNULL, env={**os.environ, **env},
+                                         start_new_session=True)
+        if self.warm:
+            self._send({"warm": self.warm})
+            self._reply(300)
+
+    def stop(self) -> None:
+        if self.proc is None:
+            return
+        if self.init is not None or self.confine:
+            sandbox.end_sandbox(self.proc, self.init)
+        else:
+            self.proc.kill()
+            self.proc.wait()
+        for f in (self.proc.stdin, self.proc.stdout):
+            try:
+                f.close()
+            except OSError:
+                pass
+        self.proc, self.init = None, None
+
+    def _send(self, req: dict) -> None:
+        self.proc.stdin.write(json.dumps(req).encode() + b"\n")
+        self.proc.stdin.flush()
+
+    def _read(self, n: int, deadline: float, line: bool = False) -> bytes:
+        """At most ``n`` bytes (up to a newline with ``line``) from the server before ``deadline``."""
+        fd, out = self.proc.stdout.fileno(), bytearray()
+        while len(out) < n:
+            left = deadline - time.monotonic()
+            if left <= 0 or not select.select([fd], [], [], left)[0]:
+                raise TimeoutError("the probe server did not answer in time")
+            chunk = os.read(fd, 1 if line else min(n - len(out), 1 << 16))
+            if not chunk:
+                raise EOFError("the probe server ended")
+            out += chunk
+            if line and chunk == b"\n":
+                break
+        return bytes(out)
+
+    def _reply(self, seconds: float) -> tuple[dict, bytes]:
+        from pusht.grading import MAX_RESULTS
+
+        deadline = time.monotonic() + seconds
+        head = json.loads(self._read(200, deadline, line=True))
+        size = int(head.get("bytes", 0))
+        if not 0 <= size <= MAX_RESULTS:
+            raise ValueError("the probe server announced too many bytes")
+        return head, self._read(size, deadline) if size else b""
+
+    def run(self, test, statements: list[tuple[str, str]], fresh: int | None = None) -> dict:
+        """The raw results of ``test``'s cases on the function ``statements`` define:
+        {"fresh", "status", "setup": [lines], "results": [per case: arrays or error] or None}."""
+        from pusht.grading import decode_results
+
+        fresh = secrets.randbelow(2 ** 24) if fresh is None else fresh
+        req = {"function": test.function, "program": statements, "cases": [c.spec for c in test.cases],
+               "fresh": fresh, "helpers": helpers_for(test), "seconds": self.seconds}
+        out = {"fresh": fresh, "status": "ok", "setup": [], "results": None}
+        try:
+            if self.proc is None or self.proc.poll() is not None:
+                self.stop()
+                self.start()         # a server an earlier test's code killed: this test gets a new one
+            self._send(req)
+            head, data = self._reply(self.seconds + 30)
+        except (OSError, EOFError, TimeoutError, ValueError) as e:
+            out["status"] = f"the probe process failed ({e})"
+            self.stop()          # a server that stopped answering is not asked again
+            return out
+        out["status"] = str(head.get("status", "?"))
+        if out["status"] != "ok":
+            return out
+        try:
+            out["setup"], out["results"] = decode_results(data, len(test.cases))
+        except (ValueError, TypeError) as e:
+            out["status"] = f"unreadable results ({str(e)[:200]})"
+        return out

@@ -1,0 +1,192 @@
+"""The grader's probe process: define a student's function from their cells, run the probes on it.
+
+Learners never need this module. The autograder (``autograde/probe.py``) starts it once per
+grading task, inside a sandbox of its own, with a copy of this package in which the exercises'
+implementations only raise (``pusht.grading``), and talks to it over its standard streams:
+
+    python -P -m pusht.probe_server
+
+Each line on its standard input is a request (JSON) from the grader: the statements that define
+the graded function (the student's cells above the test cell, as ``autograde/probe.py`` chose
+them), the function's name, the probe cases, the nonce, any function the cases hand over
+(``helpers``, source text) and a time limit. For each, it forks a child that executes the
+statements in a fresh ``__main__``, runs the cases on the function and writes the encoded results
+(``pusht.grading.encode_results``) into a pipe of its own; the server reads at most
+``MAX_RESULTS`` bytes from it before the limit, kills the child's process group, and answers on
+its standard output with one header line and those bytes. The grader decodes them
+(``decode_results``) and judges them; nothing the child writes is trusted.
+
+The server itself runs no student code. It makes itself non-dumpable (inherited by every child),
+so a child cannot trace it or any other child, nor open their descriptors through ``/proc``; a
+child holds only its own pipe and ``/dev/null`` on its standard streams, so it cannot answer for
+another request. One student's requests share a server, so a child can at worst spoil its own
+student's later results (kill the server, say), never another student's.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import select
+import signal
+import sys
+import time
+
+PR_SET_DUMPABLE = 4
+MAX_REQUEST = 8 << 20          # bytes of one request line (the grader's own)
+
+
+def _nondumpable() -> None:
+    import ctypes
+
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_DUMPABLE, 0, 0, 0, 0)
+    except (OSError, AttributeError):
+        pass
+
+
+def warm(statements: list[str]) -> None:
+    """Import what the notebooks import, once, before any fork (each one that fails is skipped)."""
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    import numpy  # noqa: F401
+    import torch  # noqa: F401
+
+    import pusht.grading  # noqa: F401
+    for src in statements:
+        try:
+            exec(compile(src, "<warm-up>", "exec"), {"__name__": "__warm__"})
+        except BaseException:      # noqa: BLE001  an import this sandbox cannot do
+            pass
+
+
+def _child(req: dict, w: int) -> None:
+    """In the forked child: define, probe, write the results to ``w``; never returns."""
+    import resource
+    import types
+
+    from pusht import grading
+
+    try:
+        os.setsid()
+        null = os.open(os.devnull, os.O_RDWR)
+        for fd in (0, 1, 2):
+            os.dup2(null, fd)
+        os.closerange(3, w)
+        os.closerange(w + 1, 1 << 16)
+        seconds = max(1, int(req.get("seconds", 120)))
+        resource.setrlimit(resource.RLIMIT_CPU, (seconds, seconds + 1))
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        main = types.ModuleType("__main__")
+        sys.modules["__main__"] = main
+        ns = main.__dict__
+        setup = []
+        for label, src in req["program"]:
+            try:
+                exec(compile(src, label, "exec"), ns)
+            except BaseException as e:     # noqa: BLE001  the cell's own error, as the kernel had it
+                setup.append(f"{label}: {type(e).__name__}: {str(e)[:200]}")
+        helpers = {}
+        for name, src in req.get("helpers", {}).items():
+            space = {"torch": __import__("torch"), "__name__": "pusht_helpers"}
+            exec(compile(src, f"<{name}>", "exec"), space)
+            helpers[name] = space[name]
+        fn = ns.get(req["function"])
+        n = len(req["cases"])
+        if not callable(fn):
+            why = (f"`{req['function']}` is not defined by the cells above the test cell"
+                   if fn is None else f"`{req['function']}` is not a function")
+            results = [why] * n
+        else:
+            results = grading.run_probes(req["cases"], fn, int(req["fresh"]), helpers)
+        data = grading.encode_results(results, setup)
+    except BaseException as e:             # noqa: BLE001
+        data = json.dumps({"setup": [f"the probe stopped: {type(e).__name__}: {str(e)[:200]}"],
+                           "results": None}).encode()
+    view = memoryview(data)
+    try:
+        while view:
+            view = view[os.write(w, view[: 1 << 16]):]
+    finally:
+        os._exit(0)
+
+
+def _collect(pid: int, r: int, limit: int, seconds: float) -> tuple[str, bytes]:
+    """Read the child's pipe until it is done, the limit or the clock; then kill its group."""
+    chunks, size, status = [], 0, "ok"
+    deadline = time.monotonic() + seconds
+    exited = False
+    while True:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            status = "timeout"
+            break
+        ready, _, _ = select.select([r], [], [], min(left, 0.05 if exited else 1.0))
+        if ready:
+            data = os.read(r, 1 << 16)
+            if not data:
+                break
+            chunks.append(data)
+            size += len(data)
+            if size > limit:
+                status = "toolarge"
+                break
+        elif exited:
+            break                      # the child is gone and nothing more came: a grandchild holds the pipe
+        if not exited:
+            done, _ = os.waitpid(pid, os.WNOHANG)
+            exited = done == pid
+    for target in (-pid, pid):
+        try:
+            os.kill(target, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
+    if not exited:
+        try:
+            os.waitpid(pid, 0)
+        except ChildProcessError:
+            pass
+    os.close(r)
+    return status, b"".join(chunks)
+
+
+def serve(stdin, stdout) -> None:
+    from pusht.grading import MAX_RESULTS
+
+    while True:
+        line = stdin.readline(MAX_REQUEST)
+        if not line:
+            return
+        req = json.loads(line)
+        if "warm" in req:
+            warm(req["warm"])
+            stdout.write(b'{"status": "warm"}\n')
+            stdout.flush()
+            continue
+        r, w = os.pipe()
+        pid = os.fork()
+        if pid == 0:
+            os.close(r)
+            _child(req, w)
+        os.close(w)
+        status, data = _collect(pid, r, MAX_RESULTS, float(req.get("seconds", 120)) + 5)
+        if status == "toolarge":
+            data = b""
+        stdout.write(json.dumps({"status": status, "bytes": len(data)}).encode() + b"\n" + data)
+        stdout.flush()
+
+
+def main() -> int:
+    _nondumpable()
+    signal.signal(signal.SIGCHLD, signal.SIG_DFL)
+    os.chdir(os.environ.get("TMPDIR", "/tmp"))
+    stdin = os.fdopen(os.dup(0), "rb")
+    stdout = os.fdopen(os.dup(1), "wb")
+    null = os.open(os.devnull, os.O_RDWR)
+    os.dup2(null, 0)
+    os.dup2(null, 1)
+    serve(stdin, stdout)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

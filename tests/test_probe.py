@@ -1,0 +1,352 @@
+"""Verdict inputs from a process no kernel touched (autograde/probe.py, pusht/probe_server.py).
+
+What is shown here, each against a student who attacks it from inside the probe itself (their
+definitions run there, so that is where an attack would come from):
+
+* the package's own implementations are absent from the probe process: not callable, not in
+  memory, not on any file it can read, under any name or wrapper;
+* what a child writes reaches the grader only through its own pipe, bounded: forged replies,
+  rebound harness functions, a killed server, a flood of bytes, a child that never returns, and a
+  child that lingers to spoil the next one all earn nothing, and the next test is judged as usual;
+* what runs: the definitions above the test cell, and only what the graded function needs.
+"""
+
+import ast
+import inspect
+import json
+import sys
+import textwrap
+from pathlib import Path
+
+import nbformat
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "autograde"))
+
+import checks  # noqa: E402
+import probe  # noqa: E402
+import sandbox  # noqa: E402
+import stripped  # noqa: E402
+
+needs_bwrap = pytest.mark.skipif(not sandbox.available()[0], reason=f"no sandbox here: {sandbox.available()[1]}")
+SOLUTIONS = {t.test_id: nbformat.read(ROOT / "solutions" / f"{t.notebook}.ipynb", as_version=4) for t in checks.TESTS.values()}
+
+
+def cells(*sources):
+    return [nbformat.v4.new_code_cell(textwrap.dedent(s)) for s in sources]
+
+
+def with_test(test, *sources):
+    """Code cells, then the test's cell (as the grader finds it: by its grade id)."""
+    tc = nbformat.v4.new_code_cell("pass")
+    tc.metadata["nbgrader"] = {"grade_id": test.test_id, "grade": True, "points": 1}
+    return cells(*sources) + [tc]
+
+
+def solution_program(test):
+    return probe.program(SOLUTIONS[test.test_id].cells, test.test_id, test.function)
+
+
+@pytest.fixture(scope="module")
+def server():
+    lease = sandbox.allocate_uid()
+    release = {p.name: nbformat.read(p, as_version=4) for p in sorted((ROOT / "notebooks").glob("*.ipynb"))}
+    srv = probe.ProbeServer(lease.uid, sandbox.DEFAULT_LIMITS, probe.warm_statements(release), seconds=10)
+    srv.start()
+    yield srv
+    srv.stop()
+    lease.sweep()
+    lease.close()
+
+
+# --- what is run ------------------------------------------------------------------------------------
+def test_the_program_is_the_definitions_the_function_needs_and_not_the_notebooks_work():
+    t = checks.LAMBDA
+    nb = with_test(t, """
+        import torch
+        GAMMA_DEFAULT = 0.99
+        model = train_for_an_hour()            # the notebook's work: not needed by the function
+        plt_figure = draw(model)
+        """, """
+        def _step(r, v_next, g_next, gamma, lam):
+            return r + gamma * ((1 - lam) * v_next + lam * g_next)
+        """, """
+        %%time
+        def lambda_return(rewards, values, gamma=GAMMA_DEFAULT, lam=0.95):
+            out, last = [], values[-1]
+            for t in reversed(range(rewards.shape[0])):
+                last = _step(rewards[t], values[t + 1], last, gamma, lam)
+                out.append(last)
+            return torch.stack(out[::-1])
+        """)
+    text = "\n".join(src for _, src in probe.program(nb, t.test_id, t.function))
+    assert "GAMMA_DEFAULT = 0.99" in text and "def _step" in text and "def lambda_return" in text
+    assert "train_for_an_hour" not in text and "draw(" not in text
+
+
+def test_a_local_name_that_shadows_a_global_pulls_in_nothing():
+    # the function's locals `states`, `values` are not the notebook's globals of the same names
+    t = checks.LOSSES
+    nb = with_test(t, """
+        import torch
+        states = expensive_dream()
+        values = expensive_values(states)
+        def lambda_return(rewards, values, gamma, lam):
+            return rewards
+        def actor_critic_losses(agent, states, rewards, entropy, gamma, lam, ent_coef, return_fn=lambda_return):
+            values = agent.value(states)
+            return values.mean(), values.mean()
+        """)
+    text = "\n".join(src for _, src in probe.program(nb, t.test_id, t.function))
+    assert "expensive" not in text and "def lambda_return" in text
+
+
+def test_a_definition_after_the_test_cell_is_not_the_one_judged():
+    t = checks.LAMBDA
+    nb = with_test(t, "def lambda_return(r, v, g, l):\n    return 'above'\n") + \
+        cells("def lambda_return(r, v, g, l):\n    return 'below'\n")
+    text = "\n".join(src for _, src in probe.program(nb, t.test_id, t.function))
+    assert "'above'" in text and "'below'" not in text
+
+
+# --- what the probe process has and has not ----------------------------------------------------------
+def test_the_stripped_package_has_every_marked_implementation_replaced():
+    refs = stripped.references()
+    for test in checks.TESTS.values():
+        module, name = test.reference.split(":")
+        assert name in refs.get(module, []), (module, name)
+    text = (stripped.package() / "reward.py").read_text()
+    assert "ReferenceRefused" in text and "atan2" not in text
+
+
+def _body_lines(test) -> list[str]:
+    """The reference's own code lines (long enough to be its own): the needles of the search below."""
+    fn = checks.reference_function(test)
+    tree = ast.parse(textwrap.dedent(inspect.getsource(fn)))
+    body = tree.body[0].body
+    if isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant):
+        body = body[1:]
+    src = textwrap.dedent(inspect.getsource(fn)).splitlines()
+    lines = [src[n.lineno - 1].strip() for n in body]
+    return [l for l in lines if len(l) >= 30 and l not in _outside_references()]
+
+
+def _outside_references() -> str:
+    """The package's source with the marked implementations cut out: a line found there too (the
+    page's wiring shares lines with Dreamer's) is not the answer key's own."""
+    out = []
+    for path in sorted((ROOT / "pusht").rglob("*.py")):
+        text = path.read_text()
+        tree = ast.parse(text)
+        lines = text.splitlines()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.FunctionDef) and stripped._is_reference(node):
+                for k in range(node.lineno - 1, node.end_lineno):
+                    lines[k] = ""
+        out.append("\n".join(lines))
+    return "\n".join(out)
+
+
+SEARCH = '''
+import gc, os, sys, importlib, inspect, time, types, torch
+
+FOUND = []
+
+
+def reward_from_obs(norm_obs, mean, std):
+    if FOUND:                                 # the search once, for the first of the cases
+        return FOUND[0]
+    T0 = time.time()
+    needles = [n.encode() for n in NEEDLES]
+    found_files, found_code, called = 0, 0, 0
+    for root, dirs, files in os.walk("/"):
+        dirs[:] = [d for d in dirs if not (root == "/" and d in ("proc", "sys", "dev"))]
+        for f in files:
+            p = os.path.join(root, f)
+            if not f.endswith((".py", ".pyc", ".ipynb", ".txt", ".json", ".md", ".pth")):
+                continue
+            try:
+                if os.path.getsize(p) > 4 << 20 or os.path.islink(p):
+                    continue
+                data = open(p, "rb").read()
+            except OSError:
+                continue
+            if any(n in data for n in needles):
+                found_files += 1
+    for obj in gc.get_objects():            # every function in memory, whatever holds it
+        if isinstance(obj, types.FunctionType) and obj.__name__ in NAMES \
+                and "ReferenceRefused" not in obj.__code__.co_names and (obj.__module__ or "").startswith("pusht"):
+            found_code += 1
+    for module, name in REFS:                 # every route to the package's own: none computes
+        fn = getattr(importlib.import_module(module), name)
+        for f in (fn, inspect.unwrap(fn), getattr(fn, "__wrapped__", fn)):
+            try:
+                f(torch.zeros(2, 6), torch.zeros(6), torch.ones(6))
+                called += 1
+            except Exception as e:
+                if type(e).__name__ != "ReferenceRefused":
+                    called += 1 if "argument" not in str(e) and "shape" not in str(e) else 0
+    FOUND.append(torch.tensor([float(found_files), float(found_code), float(called), time.time() - T0]))
+    return FOUND[0]
+'''
+
+
+@needs_bwrap
+def test_the_package_answers_are_nowhere_in_the_probe_process(server):
+    needles = [l for t in checks.TESTS.values() for l in _body_lines(t)]
+    assert len(needles) >= 8
+    here = sum(any(n.encode() in p.read_bytes() for n in needles) for p in (ROOT / "pusht").rglob("*.py"))
+    assert here >= 4                        # the search would find them where they are
+    refs = [tuple(t.reference.split(":")) for t in checks.TESTS.values()]
+    src = SEARCH.replace("NEEDLES", repr(needles)).replace("NAMES", repr({n for _, n in refs})) \
+        .replace("REFS", repr(refs))
+    server.seconds = 300                      # the search reads every source file it can see
+    try:
+        out = server.run(checks.REWARD, [("<search>", src)])
+    finally:
+        server.seconds = 10
+    assert out["status"] == "ok", out
+    found = out["results"][0]
+    assert not isinstance(found, str), found
+    files, code, called, seconds = found["out0"].tolist()
+    print(f"searched the probe process's files and memory in {seconds:.0f} s")
+    assert (files, code, called) == (0, 0, 0), found
+
+
+@needs_bwrap
+@pytest.mark.parametrize("test", list(checks.TESTS.values()), ids=list(checks.TESTS))
+def test_delegating_to_the_package_earns_nothing_by_construction(server, test):
+    module, name = test.reference.split(":")
+    routes = [f"from {module} import {name} as {test.function}\n",
+              f"import importlib\n{test.function} = getattr(importlib.import_module('{module}'), '{name}')\n",
+              f"import {module}, inspect\n{test.function} = inspect.unwrap({module}.{name})\n"]
+    for src in routes:
+        out = server.run(test, [("<cell>", src)])
+        v = checks.judge(test, out)
+        assert not v.passed and "ReferenceRefused" in v.message, (src, v.message)
+    v = checks.judge(test, server.run(test, solution_program(test)))
+    assert v.passed, v.message                 # the instructor's own answer, through the same door
+
+
+# --- what comes back ----------------------------------------------------------------------------------
+ATTACKS = {
+    "forged reply on every fd": """
+        import os, json
+        def reward_from_obs(norm_obs, mean, std):
+            fake = b'{"status": "ok", "bytes": 2}\\n{}' + json.dumps({"setup": [], "results": []}).encode()
+            for fd in range(64):
+                try:
+                    os.write(fd, fake)
+                except OSError:
+                    pass
+            for p in os.listdir("/proc"):
+                if p.isdigit():
+                    for fd in range(64):
+                        try:
+                            with open(f"/proc/{p}/fd/{fd}", "wb") as f:
+                                f.write(fake)
+                        except OSError:
+                            pass
+            return norm_obs.sum(-1), norm_obs.sum(-1), norm_obs.sum(-1)
+        """,
+    "rebound harness": """
+        import pusht.grading as g, numpy as np
+        g.run_probes = lambda cases, fn, fresh, helpers=None: [{"out0": np.zeros(1)}] * len(cases)
+        g.encode_results = lambda results, setup=(): b'{"setup": [], "results": []}'
+        def reward_from_obs(norm_obs, mean, std):
+            raise RuntimeError("never called")
+        """,
+    "looks for the probe on its stack": """
+        import inspect
+        def reward_from_obs(norm_obs, mean, std):
+            for frame in inspect.stack():
+                for value in list(frame.frame.f_locals.values()) + list(frame.frame.f_globals.values()):
+                    if callable(value) and getattr(value, "__name__", "") == "reward_from_obs" \\
+                            and value is not reward_from_obs:
+                        return value(norm_obs, mean, std)
+            return 0 * norm_obs.sum(-1), 0 * norm_obs.sum(-1), 0 * norm_obs.sum(-1)
+        """,
+    "kills the server": """
+        import os, signal
+        os.kill(os.getppid(), signal.SIGKILL)
+        def reward_from_obs(norm_obs, mean, std):
+            return norm_obs, norm_obs, norm_obs
+        """,
+    "exits": "import os\nos._exit(0)\n",
+    "floods": """
+        import os
+        def reward_from_obs(norm_obs, mean, std):
+            import pusht.grading as g
+            for fd in range(3, 64):
+                try:
+                    while True:
+                        os.write(fd, b"[" * (1 << 20))
+                except OSError:
+                    pass
+        """,
+    "never returns": "def reward_from_obs(norm_obs, mean, std):\n    while True:\n        pass\n",
+    "deep json": """
+        import os
+        for fd in range(3, 64):
+            try:
+                os.write(fd, b"[" * 100000)
+            except OSError:
+                pass
+        os._exit(0)
+        """,
+}
+
+
+@needs_bwrap
+@pytest.mark.parametrize("name", list(ATTACKS))
+def test_what_a_child_writes_earns_nothing_and_the_next_test_is_judged_as_usual(server, name):
+    out = server.run(checks.REWARD, [("<attack>", textwrap.dedent(ATTACKS[name]))])
+    v = checks.judge(checks.REWARD, out)
+    assert not v.passed, (name, v.message)
+    v = checks.judge(checks.LAMBDA, server.run(checks.LAMBDA, solution_program(checks.LAMBDA)))
+    assert v.passed, (name, v.message)
+
+
+@needs_bwrap
+def test_a_child_left_running_cannot_spoil_the_next_childs_results(server):
+    spoiler = textwrap.dedent("""
+        import os, time
+        if os.fork() == 0:
+            os.setsid()
+            if os.fork() == 0:
+                end = time.time() + 6
+                while time.time() < end:
+                    for p in os.listdir("/proc"):
+                        if p.isdigit() and int(p) != os.getpid():
+                            for fd in range(64):
+                                try:
+                                    with open(f"/proc/{p}/fd/{fd}", "wb") as f:
+                                        f.write(b"garbage")
+                                except OSError:
+                                    pass
+                            try:
+                                os.kill(int(p), 19)        # SIGSTOP
+                            except OSError:
+                                pass
+                os._exit(0)
+            os._exit(0)
+        def reward_from_obs(norm_obs, mean, std):
+            return norm_obs.sum(-1), norm_obs.sum(-1), norm_obs.sum(-1)
+        """)
+    assert not checks.judge(checks.REWARD, server.run(checks.REWARD, [("<spoiler>", spoiler)])).passed
+    for test in (checks.LAMBDA, checks.DISAGREE, checks.LOSSES):
+        v = checks.judge(test, server.run(test, solution_program(test)))
+        # the spoiler may stop a later child (the same student's own grade), but never make it pass
+        # with wrong numbers or fail with right ones through the pipe: a stopped child times out
+        assert v.passed or "did not finish" in v.message or "could not be checked" in v.message, v.message
+
+
+def test_results_are_decoded_with_bounds():
+    from pusht.grading import MAX_RESULTS, decode_results
+
+    for bad in (b"[" * 100000, b"x" * (MAX_RESULTS + 1), b'{"setup": [], "results": [{"a": [[1000000], "AAAA"]}]}',
+                json.dumps({"setup": [], "results": [{"a": [[3], "AAAAAAAAAAAAAAAAAAAAAA=="]}]}).encode(),
+                b'{"setup": [], "results": [1]}', "\udcff".encode("utf-8", "surrogatepass")):
+        with pytest.raises(ValueError):
+            decode_results(bad, 1)
