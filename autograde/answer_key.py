@@ -10,9 +10,11 @@ understood the exercise may write, and only a person can tell the two apart.
 The comparison is on what the code does, not how it is spelled: both functions are parsed, their
 docstrings, annotations, decorators and comments dropped, every name (arguments, locals, globals
 and module aliases) renamed in order of first use, and each top-level statement of the body
-printed. A function is flagged when the package's statements all appear in it, in the same order
-(a copy with prints, asserts or comments added is still a copy); renaming variables, reformatting
-or re-commenting the key does not hide it. Reordering independent statements or rewriting an
+printed. Every function defined above the test cell is compared, not only the graded one (a copy
+renamed and called from the graded function, or assigned to its name, is still found). A function
+is flagged when the package's statements all appear in it, in the same order (a copy with prints,
+asserts or comments added is still a copy); renaming variables, reformatting or re-commenting the
+key does not hide it. Reordering independent statements or rewriting an
 expression does, which is then the learner's own work.
 """
 
@@ -23,8 +25,7 @@ import inspect
 import textwrap
 from functools import lru_cache
 
-import cellcode
-import checks
+from . import cellcode, checks
 
 MIN_STATEMENTS = 3          # a key shorter than this is one line anyone would write
 
@@ -77,33 +78,34 @@ def _in_order(needle: tuple, hay: list) -> bool:
     return all(any(h == n for h in it) for n in needle)
 
 
-def graded_definition(cells, test) -> tuple[int, ast.FunctionDef] | None:
-    """(cell number, definition) of the last top-level ``def`` of the test's function above its test
-    cell: the one the probe process judges."""
-    found = None
+def definitions(cells, test):
+    """(cell number, definition) of every function defined in the cells above the test cell, at any
+    depth: the graded function, and any helper, alias target or method it may hand its work to."""
     for i, cell in enumerate(cells):
         if cellcode.gid(cell) == test.test_id and cell.get("cell_type") == "code":
-            break
+            return
         if cell.get("cell_type") != "code":
             continue
         tree = cellcode.parse(cellcode.source(cell))
-        for node in tree.body if tree is not None else []:
-            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name == test.function:
-                found = (i + 1, node)
-    return found
+        for node in ast.walk(tree) if tree is not None else []:
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                yield i + 1, node
 
 
 def copies(cells, test) -> str | None:
-    """A line for the instructor where the graded function holds the package's implementation, else None."""
-    found = graded_definition(cells, test)
+    """A line for the instructor where a function above the test cell holds the package's
+    implementation of the tested one (the graded function itself, or a helper it may call under
+    any name), else None."""
     want = key(test.test_id)
-    if found is None or len(want) < MIN_STATEMENTS:
-        return None
-    cell, fn = found
-    mine = normalised(fn)
-    if not _in_order(want, mine):
+    if len(want) < MIN_STATEMENTS:
         return None
     module, name = test.reference.split(":")
-    how = "the same statements" if len(mine) == len(want) else f"all {len(want)} of its statements, in order, among {len(mine)}"
-    return (f"`{test.function}` (cell {cell}) holds the package's own `{module}.{name}` ({how}, names aside): "
-            f"a copy of the answer key, or the same steps written independently. Its score stands; read it")
+    for cell, fn in definitions(cells, test):
+        mine = normalised(fn)
+        if not _in_order(want, mine):
+            continue
+        how = ("the same statements" if len(mine) == len(want) else
+               f"all {len(want)} of its statements, in order, among {len(mine)}")
+        return (f"`{fn.name}` (cell {cell}) holds the package's own `{module}.{name}` ({how}, names aside): "
+                f"a copy of the answer key, or the same steps written independently. Its score stands; read it")
+    return None

@@ -62,10 +62,17 @@ def _python(src: str) -> str:
     return "\n".join("" if line.lstrip().startswith(("%", "!")) else line for line in src.splitlines())
 
 
+MAX_CELL_CHARS = 200_000      # a cell's code that is parsed at all: a chapter cell is under 5,000
+
+
 @lru_cache(maxsize=4096)
 def parse(src: str) -> ast.Module | None:
     """The cell's code as the kernel runs it, or None where it would not compile. The same text
-    gives the same tree object (a hand-in's cells are read by several checks): do not change it."""
+    gives the same tree object (a hand-in's cells are read by several checks): do not change it.
+    A cell longer than ``MAX_CELL_CHARS`` is not parsed (None): its syntax tree would take about
+    600 times its size in the grader's memory."""
+    if len(src) > MAX_CELL_CHARS:
+        return None
     try:
         tree = ast.parse(_python(src))
     except (SyntaxError, ValueError, RecursionError, MemoryError):   # the kernel would refuse it too

@@ -1,15 +1,11 @@
-"""Dask worker preload: make the course's grader importable on this worker.
+"""Dask worker preload: check, on every worker Dask starts, that this course's grader imports there.
 
-    dask worker tcp://SCHEDULER:8786 --nworkers 2 --nthreads 1 --preload autograde/dask_preload.py
+    dask worker tcp://SCHEDULER:8786 --nworkers 2 --nthreads 1 --preload autograde.dask_preload
 
-(run from a checkout of the course after ``make setup``; see the README, "Grading a large class").
-Dask imports this file on every worker it starts, restarted ones included, so ``grade.grade_task``,
-which the coordinator's tasks call, resolves to this checkout's ``autograde/grade.py``.
+(run from a checkout of the course after ``make setup``, which installs the ``autograde`` package
+with ``pusht``; see the README, "Grading a large class"). The coordinator's tasks call
+``autograde.task.grade_task``; importing it here makes a worker without the course fail at start,
+not at its first task.
 """
 
-import sys
-from pathlib import Path
-
-HERE = str(Path(__file__).resolve().parent)
-if HERE not in sys.path:
-    sys.path.insert(0, HERE)
+import autograde.task  # noqa: F401

@@ -48,8 +48,7 @@ import importlib
 import inspect
 from dataclasses import dataclass, field
 
-import cellcode
-import checks
+from . import cellcode, checks
 
 HARNESS_WORDS = ("pusht.grading", "PUSHT_GRADING", "_PROBING", "__pusht_reference__", "ReferenceRefused")
 # Called by bare name: Python's own ways of reaching a name at run time.

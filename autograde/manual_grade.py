@@ -1,8 +1,8 @@
 """Enter a manual grade headless; it is kept in manual_grades.csv and survives every regrade.
 
-    python autograde/manual_grade.py STUDENT NOTEBOOK GRADE_ID SCORE [--comment "..."]
+    python -m autograde.manual_grade STUDENT NOTEBOOK GRADE_ID SCORE [--comment "..."]
 
-e.g. ``python autograde/manual_grade.py s042 04_imagination_gap ex1_sentence 1 --comment "Clear."``
+e.g. ``python -m autograde.manual_grade s042 04_imagination_gap ex1_sentence 1 --comment "Clear."``
 The CSV is the source of truth; this also writes the grade into the gradebook now and refreshes
 the student's feedback and grades.csv.
 """
@@ -14,10 +14,8 @@ import csv
 import sys
 from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-
-from grade import ASSIGNMENT, COURSE_ID, generate_feedback, nbgrader  # noqa: E402
+from .course import ASSIGNMENT, COURSE_ID, HERE, nbgrader
+from .feedback import generate_feedback
 
 FIELDS = ["student_id", "notebook", "grade_id", "score", "comment"]
 
@@ -47,7 +45,7 @@ def set_manual_grade(student: str, notebook: str, grade_id: str, score: float, c
         w = csv.DictWriter(f, FIELDS)
         w.writeheader()
         w.writerows(sorted(rows, key=lambda r: (r["student_id"], r["notebook"], r["grade_id"])))
-    # the same pages, exporter and time limit as grade.py's; a page that cannot be made is said, not silent
+    # the same pages, exporter and time limit as grading's (feedback.py); a page that cannot be made is said, not silent
     generate_feedback(course, [student], jobs=1, log=lambda line: print(line, file=sys.stderr))
     nbgrader(course, "export", f"--to={course / 'grades.csv'}")
 

@@ -41,19 +41,30 @@ import sys
 import time
 from pathlib import Path
 
-import cellcode
-import sandbox
-import stripped
+from . import cellcode, sandbox, stripped
 
 SETUP = (ast.Import, ast.ImportFrom, ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)
 PROBE_SECONDS = 120          # per test: defining the function and every case
 
 
 # --- what to run: the definitions above the test cell ----------------------------------------------
-def _bound(node) -> set[str]:
-    """Names a top-level statement binds (not inside functions, classes or lambdas it defines)."""
+def _base_name(node) -> str | None:
+    """``X`` of ``X``, ``X.a.b`` or ``X[i][j]``: the name whose value an access starts from."""
+    while isinstance(node, (ast.Attribute, ast.Subscript)):
+        node = node.value
+    return node.id if isinstance(node, ast.Name) else None
+
+
+def _bound(node, sets_globals: dict | None = None, values: set | None = None) -> set[str]:
+    """Names a top-level statement binds or changes (not inside the functions, classes or lambdas
+    it defines): assignment, import, ``del``, a store into ``X[...]`` or ``X.attr`` (augmented too),
+    ``setattr(X, ...)``, a call of a notebook function that declares ``global X`` (``sets_globals``:
+    {function: names}), and a method called on ``X`` where ``X`` is one of ``values``, the names the
+    notebook assigns itself (``X.update(...)``, ``X.append(...)``): not a module's function
+    (``torch.manual_seed(0)`` changes no name the graded function would need)."""
     if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
         return {node.name}
+    sets_globals, values = sets_globals or {}, values or set()
     out, todo = set(), [node]
     while todo:
         n = todo.pop()
@@ -61,6 +72,16 @@ def _bound(node) -> set[str]:
             out |= {(a.asname or a.name).split(".")[0] for a in n.names}
         elif isinstance(n, ast.Name) and isinstance(n.ctx, (ast.Store, ast.Del)):
             out.add(n.id)
+        elif isinstance(n, (ast.Attribute, ast.Subscript)) and isinstance(n.ctx, (ast.Store, ast.Del)):
+            out.add(_base_name(n))
+        elif isinstance(n, ast.Call):
+            f = n.func
+            if isinstance(f, ast.Attribute) and _base_name(f.value) in values:
+                out.add(_base_name(f.value))
+            elif isinstance(f, ast.Name):
+                out |= sets_globals.get(f.id, set())
+                if f.id == "setattr" and n.args:
+                    out.add(_base_name(n.args[0]))
         elif isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
             out.add(n.name)
             continue
@@ -69,7 +90,13 @@ def _bound(node) -> set[str]:
         elif isinstance(n, (ast.MatchAs, ast.MatchStar)) and n.name:
             out.add(n.name)
         todo.extend(ast.iter_child_nodes(n))
+    out.discard(None)
     return out
+
+
+def _global_writes(node) -> set[str]:
+    """Names a function definition declares ``global`` anywhere in its body."""
+    return {name for n in ast.walk(node) if isinstance(n, ast.Global) for name in n.names}
 
 
 def _reads(node) -> set[str]:
@@ -101,10 +128,12 @@ def program(cells, test_id: str, function: str) -> list[tuple[str, str]]:
     """[(label, statement source)] that define ``function`` as the cells above the test cell do.
 
     Every import and definition is kept (they are cheap, and a function may reach them at run time
-    by any name); any other statement is kept where it binds a name that the function reads, or
-    that a statement it needs reads, and so on: a constant, an alias, a table, a default argument.
-    A statement that only the notebook's other code needs (training, plotting) is left out. Statements are kept in
-    notebook order, so a later definition replaces an earlier one as it did in the kernel."""
+    by any name); any other statement is kept where it binds or changes a name that the function
+    reads, or that a statement it needs reads, and so on (``_bound``): a constant, an alias, a table
+    and the entries put into it, a default argument, a global a configuring call sets. A statement
+    that only the notebook's other code needs (training, plotting) is left out. Statements are kept
+    in notebook order, so a later definition replaces an earlier one as it did in the kernel. The
+    work is linear in the notebook's statements (each name is looked up once)."""
     end = test_cell_index(cells, test_id)
     stmts = []
     for i, cell in enumerate(cells[:end] if end is not None else cells):
@@ -114,15 +143,23 @@ def program(cells, test_id: str, function: str) -> list[tuple[str, str]]:
         for node in tree.body if tree is not None else []:
             stmts.append((f"<cell {i + 1}, line {getattr(node, 'lineno', 0)}>", node))
     setup = [isinstance(node, SETUP) for _, node in stmts]
-    bound = [_bound(node) for _, node in stmts]
+    sets_globals = {node.name: _global_writes(node) for _, node in stmts
+                    if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and _global_writes(node)}
+    values = {n.id for _, node in stmts if not isinstance(node, SETUP)
+              for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)}
+    binders: dict[str, list[int]] = {}          # name -> the statements that bind or change it
+    for k, (_, node) in enumerate(stmts):
+        for name in _bound(node, sets_globals, values):
+            binders.setdefault(name, []).append(k)
     needed = [False] * len(stmts)
-    need, changed = {function}, True
-    while changed:
-        changed = False
-        for k, (_, node) in enumerate(stmts):
-            if not needed[k] and bound[k] & need:
-                needed[k], changed = True, True
-                need |= _reads(node)
+    todo, seen = [function], {function}
+    while todo:                                  # each name and each statement once: linear
+        for k in binders.get(todo.pop(), ()):
+            if not needed[k]:
+                needed[k] = True
+                for name in _reads(stmts[k][1]) - seen:
+                    seen.add(name)
+                    todo.append(name)
     keep = [a or b for a, b in zip(setup, needed)]
     out = []
     for k, (label, node) in enumerate(stmts):
@@ -170,10 +207,14 @@ class ProbeServer:
                  seconds: float = PROBE_SECONDS):
         self.uid, self.limits, self.warm, self.confine = uid, limits, list(warm), confine
         self.seconds = seconds
+        self.slack = 30.0          # seconds on top of ``seconds`` for one whole exchange with the server
         self.proc, self.init = None, None
 
     def __enter__(self) -> "ProbeServer":
-        self.start()
+        try:
+            self.start()
+        except Exception:          # noqa: BLE001  run() tries again, and says why each test was not checked
+            self.stop()
         return self
 
     def __exit__(self, *exc) -> None:
@@ -185,19 +226,28 @@ class ProbeServer:
         env.setdefault("OMP_NUM_THREADS", "1")
         env.setdefault("MKL_NUM_THREADS", "1")
         env["MPLBACKEND"] = "Agg"
+        env["NBGRADER_EXECUTION"] = "autograde"      # as in the kernel: the notebooks' grading settings
         if self.confine:
+            env["PUSHT_PROBE_SWEEP"] = "1"              # alone in its sandbox's PID namespace
             package = stripped.package()
             self.proc, self.init = sandbox.start_sandbox(
                 lambda fd: sandbox.bwrap_command(Path("/"), [], self.uid, limits=self.limits, env=env,
                                                  info_fd=fd, package=package),
-                program, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, cwd="/")
+                program, memory=sandbox.sandbox_bytes(self.limits), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                stderr=subprocess.DEVNULL, cwd="/")
         else:        # unconfined grading (no bubblewrap): the real package, with a loud warning upstream
             self.proc = subprocess.Popen(program, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                          stderr=subprocess.DEVNULL, env={**os.environ, **env},
                                          start_new_session=True)
+        os.set_blocking(self.proc.stdin.fileno(), False)     # every write has a deadline (_send)
         if self.warm:
-            self._send({"warm": self.warm})
-            self._reply(300)
+            try:
+                deadline = time.monotonic() + 300
+                self._send({"warm": self.warm}, deadline)
+                self._reply(deadline)
+            except BaseException:
+                self.stop()
+                raise
 
     def stop(self) -> None:
         if self.proc is None:
@@ -214,9 +264,17 @@ class ProbeServer:
                 pass
         self.proc, self.init = None, None
 
-    def _send(self, req: dict) -> None:
-        self.proc.stdin.write(json.dumps(req).encode() + b"\n")
-        self.proc.stdin.flush()
+    def _send(self, req: dict, deadline: float) -> None:
+        """Write one request before ``deadline`` (a server stopped by a child's code reads nothing)."""
+        fd, view = self.proc.stdin.fileno(), memoryview(json.dumps(req).encode() + b"\n")
+        while view:
+            left = deadline - time.monotonic()
+            if left <= 0 or not select.select([], [fd], [], left)[1]:
+                raise TimeoutError("the probe server did not take the request in time")
+            try:
+                view = view[os.write(fd, view[: 1 << 16]):]
+            except BlockingIOError:
+                continue
 
     def _read(self, n: int, deadline: float, line: bool = False) -> bytes:
         """At most ``n`` bytes (up to a newline with ``line``) from the server before ``deadline``."""
@@ -233,10 +291,9 @@ class ProbeServer:
                 break
         return bytes(out)
 
-    def _reply(self, seconds: float) -> tuple[dict, bytes]:
+    def _reply(self, deadline: float) -> tuple[dict, bytes]:
         from pusht.grading import MAX_RESULTS
 
-        deadline = time.monotonic() + seconds
         head = json.loads(self._read(200, deadline, line=True))
         size = int(head.get("bytes", 0))
         if not 0 <= size <= MAX_RESULTS:
@@ -256,10 +313,11 @@ class ProbeServer:
             if self.proc is None or self.proc.poll() is not None:
                 self.stop()
                 self.start()         # a server an earlier test's code killed: this test gets a new one
-            self._send(req)
-            head, data = self._reply(self.seconds + 30)
-        except (OSError, EOFError, TimeoutError, ValueError) as e:
-            out["status"] = f"the probe process failed ({e})"
+            deadline = time.monotonic() + self.seconds + self.slack      # the whole exchange, send and reply
+            self._send(req, deadline)
+            head, data = self._reply(deadline)
+        except Exception as e:     # noqa: BLE001  a server that died, stalled or never started
+            out["status"] = f"the probe process failed ({type(e).__name__}: {str(e)[:200]})"
             self.stop()          # a server that stopped answering is not asked again
             return out
         out["status"] = str(head.get("status", "?"))

@@ -39,7 +39,7 @@ import ast
 import re
 from datetime import datetime
 
-import cellcode
+from . import cellcode
 
 # Searched for in each printed line: text the learner printed without a newline just before may
 # share the receipt's line.

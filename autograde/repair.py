@@ -21,7 +21,7 @@ import copy
 import re
 
 import nbformat
-from cellcode import gid, parse, source
+from .cellcode import gid, parse, source
 
 COLAB_CELL_KEYS = ("executionInfo", "colab", "outputId")
 

@@ -73,6 +73,7 @@ DEFAULT_LIMITS = {
     "wall_seconds": 600,              # per notebook, then the sandbox is killed
     "work_bytes": 1 << 30,            # the kernel's working folder: a tmpfs of this size, in RAM
     "tmp_bytes": 256 << 20,           # its /tmp: the same
+    "sandbox_bytes": 4 << 30,         # all of one sandbox's memory, its tmpfs pages included (memory cgroup)
 }
 
 
@@ -358,7 +359,7 @@ def write_kernelspec(dest: Path, settings: dict) -> Path:
     spec_dir.mkdir(parents=True, exist_ok=True)
     (spec_dir / "settings.json").write_text(json.dumps(settings))
     (spec_dir / "kernel.json").write_text(json.dumps({
-        "argv": [sys.executable, str(Path(__file__).resolve()), str(spec_dir / "settings.json"),
+        "argv": [sys.executable, "-m", "autograde.sandbox", str(spec_dir / "settings.json"),
                  "{connection_file}"],
         "display_name": "Python 3 (pusht sandbox)", "language": "python", "interrupt_mode": "message",
         "metadata": {"debugger": False}}))
@@ -537,37 +538,160 @@ def _read_info(fd: int, timeout: float = 30.0) -> dict:
     return info if isinstance(info, dict) else {}
 
 
-def start_sandbox(build, program: list[str], **popen) -> tuple[subprocess.Popen, SandboxInit | None]:
+def start_sandbox(build, program: list[str], memory: int | None = None,
+                  **popen) -> tuple[subprocess.Popen, SandboxInit | None]:
     """Start ``build(info_fd) + program`` (``build`` makes a bwrap command line around the given
     ``--info-fd``) and learn its sandbox's init: (the bwrap process, its ``SandboxInit``, or None if
     bwrap ended before it made a sandbox). Takes milliseconds: bwrap reports the init as soon as it
     has cloned it, and holds it until then, so the init is known even if the sandbox is killed while
-    it is still being set up."""
+    it is still being set up.
+
+    ``memory``: bytes that the whole sandbox may use, every process and its tmpfs pages together,
+    where the host lets this process make a memory cgroup (``MemoryCgroup``): bwrap starts inside
+    it, so nothing of the sandbox is ever outside. ``end_sandbox`` removes it."""
+    group = MemoryCgroup.make(memory) if memory else None
     r, w = os.pipe()
     try:
-        proc = subprocess.Popen(build(w) + program, pass_fds=(w,), **popen)
+        args = build(w) + program
+        if group is not None:        # join the group, then become bwrap: its every child is born inside
+            args = ["/bin/sh", "-c", 'echo $$ > "$0" && exec "$@"', str(group.procs)] + args
+        proc = subprocess.Popen(args, pass_fds=(w,), **popen)
     except BaseException:
         os.close(r)
+        if group is not None:
+            group.remove()
         raise
     finally:
         os.close(w)
+    proc.pusht_cgroup = group
     info = _read_info(r)
     return proc, SandboxInit.open(info.get("child-pid"), info.get("pid-namespace"), parent=proc.pid)
+
+
+def sandbox_bytes(limits: dict | None) -> int:
+    """The memory cap of a whole sandbox under ``limits`` (``DEFAULT_LIMITS`` where it says none)."""
+    return int({**DEFAULT_LIMITS, **(limits or {})}["sandbox_bytes"])
+
+
+class MemoryCgroup:
+    """A memory cgroup of one sandbox (cgroup v1's memory controller, or v2 where ``memory`` is
+    delegated), under ``<hierarchy>/<this process's group>/pusht-grading/``, limited to its bytes.
+
+    RLIMIT_AS caps one process's address space, not a sandbox's: 256 processes of 6 GiB each, or a
+    tmpfs filled to its size, are not bounded by it. The kernel charges every page a process in the
+    group touches, tmpfs pages included, to the group, and kills a process in it, never outside, once
+    the group is over its limit. Where no group can be made (not root, no writable hierarchy),
+    ``make`` returns None and the sandbox runs with the per-process limits only (README)."""
+
+    FOLDER = "pusht-grading"
+
+    def __init__(self, path: Path, kind: str):
+        self.path, self.kind = path, kind
+        self.procs = path / "cgroup.procs"
+
+    @classmethod
+    def make(cls, limit: int) -> "MemoryCgroup | None":
+        found = _memory_hierarchy()
+        if found is None:
+            return None
+        parent, kind = found
+        path = parent / f"s{os.getpid()}-{time.monotonic_ns()}"
+        try:
+            path.mkdir()
+            if kind == "v1":
+                (path / "memory.limit_in_bytes").write_text(str(int(limit)))
+                try:                                   # no swap beyond the limit either, where there is swap
+                    (path / "memory.memsw.limit_in_bytes").write_text(str(int(limit)))
+                except OSError:
+                    pass
+            else:
+                (path / "memory.max").write_text(str(int(limit)))
+                try:
+                    (path / "memory.swap.max").write_text("0")
+                except OSError:
+                    pass
+        except OSError:
+            try:
+                path.rmdir()
+            except OSError:
+                pass
+            return None
+        return cls(path, kind)
+
+    def remove(self, wait: float = 5.0) -> None:
+        """Remove the group once its processes are gone (they were killed with the sandbox)."""
+        deadline = time.monotonic() + wait
+        while True:
+            try:
+                self.path.rmdir()
+                return
+            except FileNotFoundError:
+                return
+            except OSError:
+                if time.monotonic() > deadline:
+                    return
+                time.sleep(0.02)
+
+
+@lru_cache(maxsize=1)
+def _memory_hierarchy() -> tuple[Path, str] | None:
+    """(the folder sandboxes' memory cgroups are made in, "v1" or "v2"), or None where there is none."""
+    if not sys.platform.startswith("linux") or os.geteuid() != 0:
+        return None
+    try:
+        mounts = Path("/proc/self/mountinfo").read_text().splitlines()
+        own = dict(line.split(":", 2)[1:] for line in Path("/proc/self/cgroup").read_text().splitlines()
+                   if line.count(":") >= 2)
+    except OSError:
+        return None
+    found = []
+    for line in mounts:
+        pre, _, post = line.partition(" - ")
+        fields, rest = pre.split(), post.split()
+        if len(fields) < 5 or len(rest) < 3:
+            continue
+        root, mount, fstype, opts = fields[3], Path(fields[4]), rest[0], rest[2].split(",")
+        if fstype == "cgroup" and "memory" in opts:
+            found.append((mount, root, own.get("memory", "/"), "v1"))
+        elif fstype == "cgroup2":
+            found.append((mount, root, own.get("", "/"), "v2"))
+    for mount, root, mine, kind in found:
+        rel = mine[len(root):] if mine.startswith(root) else ""
+        for parent in (mount / rel.lstrip("/"), mount):
+            try:
+                if kind == "v2" and "memory" not in (parent / "cgroup.subtree_control").read_text().split():
+                    continue
+                folder = parent / MemoryCgroup.FOLDER
+                folder.mkdir(exist_ok=True)
+                if kind == "v2":
+                    (folder / "cgroup.subtree_control").write_text("+memory")
+                trial = folder / f"probe-{os.getpid()}"
+                trial.mkdir(exist_ok=True)
+                trial.rmdir()
+                return folder, kind
+            except OSError:
+                continue
+    return None
 
 
 def end_sandbox(proc: subprocess.Popen, init: SandboxInit | None) -> None:
     """Kill the sandbox ``start_sandbox`` started, everything in it and nothing else, and return once
     it is all gone: its init first (and so its namespace), then bwrap, which reaps the init and ends
     on its own (killed first, it would leave the init a zombie for the host's init to reap)."""
-    if init is not None:
-        init.kill()
-        try:
-            proc.wait(timeout=5)
-            return
-        except subprocess.TimeoutExpired:
-            pass
-    proc.kill()
-    proc.wait()
+    try:
+        if init is not None:
+            init.kill()
+            try:
+                proc.wait(timeout=5)
+                return
+            except subprocess.TimeoutExpired:
+                pass
+        proc.kill()
+        proc.wait()
+    finally:
+        group = getattr(proc, "pusht_cgroup", None)
+        if group is not None:
+            group.remove()
 
 
 def launch(settings_file: str, connection_file: str) -> int:
@@ -588,7 +712,7 @@ def launch(settings_file: str, connection_file: str) -> int:
             return code
     proc, init = start_sandbox(lambda fd: _confinement(s, workdir, [conn], info_fd=fd),
                                [sys.executable, "-m", "ipykernel_launcher", "-f", str(conn),
-                                "--HistoryManager.hist_file=:memory:"])
+                                "--HistoryManager.hist_file=:memory:"], memory=sandbox_bytes(s.get("limits")))
 
     def kill():
         end_sandbox(proc, init)     # its PID namespace: every process inside, nothing outside
@@ -784,7 +908,7 @@ class Zygote:
             # -P: the folder it starts in (the student's) is not put on sys.path for its own imports
             self.proc, self.init = start_sandbox(
                 lambda fd: _check_unbound(_confinement(self.s, self.workdir, [conns], info_fd=fd), self._folder),
-                [sys.executable, "-P", "-m", "pusht.zygote", str(ready)],
+                [sys.executable, "-P", "-m", "pusht.zygote", str(ready)], memory=sandbox_bytes(self.s.get("limits")),
                 stdin=theirs.fileno(), stdout=subprocess.DEVNULL)
             theirs.close()
             try:

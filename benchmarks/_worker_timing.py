@@ -1,6 +1,6 @@
-"""The grading worker (``grade.py --worker ...``) with two timers, for ``bench_student.py``.
+"""The grading worker (``python -m autograde.worker ARGS``) with two timers, for ``bench_student.py``.
 
-    python _worker_timing.py OUT.json grade.py --worker ARGS
+    python _worker_timing.py OUT.json -m autograde.worker ARGS
 
 Writes to OUT.json how long the worker took from here to its first notebook (``ready``: imports and
 setup; the interpreter's own start is not in it) and each wait in ``sandbox.Zygote.ensure`` for the
@@ -15,8 +15,7 @@ from pathlib import Path
 
 t0 = time.perf_counter()
 out = Path(sys.argv[1])
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "autograde"))
-import sandbox  # noqa: E402  (the module grade.py imports: the same object, patched once here)
+from autograde import sandbox
 
 timing = {"ready": None, "factory_wait": []}
 _ensure = sandbox.Zygote.ensure
@@ -33,9 +32,9 @@ def ensure(self):
 
 
 sandbox.Zygote.ensure = ensure
-sys.argv = sys.argv[2:]
+sys.argv = sys.argv[3:]          # after "-m autograde.worker": ARGS, as the worker reads them
 try:
-    runpy.run_path(sys.argv[0], run_name="__main__")
+    runpy.run_module("autograde.worker", run_name="__main__", alter_sys=True)
 finally:
     if timing["ready"] is None:           # no factory (not confined): all of it was before grading
         timing["ready"] = 0.0

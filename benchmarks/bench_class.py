@@ -4,7 +4,7 @@
                                      [--jobs N] [--compare N|all] [--scheduler ADDRESS]
 
 Builds a class of ``--students`` students by cycling through the synthetic hand-ins of
-``autograde/synthetic_class.py`` (correct, Colab-saved, wrong, out-of-order prediction, invalid
+``autograde/classes/synthetic.py`` (correct, Colab-saved, wrong, out-of-order prediction, invalid
 prediction, raising, tampered, not a notebook; ``loops``, a cell that never returns, is left out:
 its cost is the per-cell timeout, which an instructor sets; ``--kinds perfect``: complete correct
 hand-ins only), each under its own id and each a
@@ -27,15 +27,14 @@ import zipfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "autograde"))
 sys.path.insert(0, str(ROOT / "scripts"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-import grade  # noqa: E402
-import sandbox  # noqa: E402
+from autograde import grade, sandbox, schedule
+from autograde.course import ASSIGNMENT, COURSE_ID
 from bench import host_description  # noqa: E402
 from bench_grading import executed_notebooks  # noqa: E402
-from synthetic_class import build  # noqa: E402
+from autograde.classes.synthetic import build
 
 KINDS = ("perfect", "colab", "wrong", "order", "badpred", "raises", "tamper", "garbage")
 
@@ -63,8 +62,8 @@ def scores(course: Path) -> dict:
     from nbgrader.api import Gradebook
 
     out = {}
-    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=grade.COURSE_ID) as gb:
-        for sub in gb.find_assignment(grade.ASSIGNMENT).submissions:
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
+        for sub in gb.find_assignment(ASSIGNMENT).submissions:
             out[sub.student.id] = {(nb.name, g.name): g.score for nb in sub.notebooks for g in nb.grades}
     with open(course / "grades.csv", newline="") as f:
         for row in csv.DictReader(f):
@@ -88,7 +87,7 @@ def main(argv=None) -> int:
     tmp = Path(tempfile.mkdtemp(prefix="bench-class-"))
     subs = tmp / "class.zip"
     ids = class_zip(executed_notebooks(args.executed, tmp), args.students, subs, kinds)
-    jobs = args.jobs or grade.default_jobs()
+    jobs = args.jobs or schedule.default_jobs()
     print(f"host: {host_description()}, python "
           f"{platform.python_version()}; confined: {sandbox.available()[0]}; {len(ids)} students "
           f"({', '.join(kinds)}, cycled); jobs {jobs}", flush=True)

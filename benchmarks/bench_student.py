@@ -3,9 +3,9 @@
     python benchmarks/bench_student.py [--executed DIR] [--repeats 3]
 
 Grades a class of SHARE_FROM correct students once (``grade.grade_class``, so the stages are shared
-as in a real batch), then grades one of them again ``--repeats`` times with ``grade.grade_task``
+as in a real batch), then grades one of them again ``--repeats`` times with ``task.grade_task``
 alone, one at a time, with the batch's shared stages. Each time, the grading worker runs under a
-small timing shim (``benchmarks/_worker_timing.py``: the same ``grade.py --worker``, with timers
+small timing shim (``benchmarks/_worker_timing.py``: the same ``python -m autograde.worker``, with timers
 around its imports and its waits for the kernel factory). It reads each notebook's cell times from
 the autograded notebook (nbclient records when every cell started and ended). Then it times
 nbgrader's feedback for one student in a warm process. Prints one table of medians. The figures
@@ -24,10 +24,10 @@ from datetime import datetime
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT / "autograde"), str(ROOT / "scripts"), str(ROOT / "benchmarks")]
+sys.path[:0] = [str(ROOT / "scripts"), str(ROOT / "benchmarks")]
 
-import grade  # noqa: E402
-import sandbox  # noqa: E402
+from autograde import feedback, grade, sandbox, stages, task
+from autograde.course import course_bundle
 from bench import host_description  # noqa: E402
 from bench_class import class_zip  # noqa: E402
 from bench_grading import command_line, executed_notebooks  # noqa: E402
@@ -53,18 +53,18 @@ def graded_once(course: Path, zip_path: Path, student: str, timing_file: Path) -
 
     class Timed(popen):                      # only the worker's command line changes
         def __init__(self, cmd, *a, **k):
-            if isinstance(cmd, list) and "--worker" in cmd:
+            if isinstance(cmd, list) and "autograde.worker" in cmd:
                 cmd = [cmd[0], str(SHIM), str(timing_file)] + cmd[1:]
             super().__init__(cmd, *a, **k)
 
-    grade.subprocess.Popen = Timed
+    task.subprocess.Popen = Timed
     try:
         t = time.perf_counter()
-        out = grade.grade_task(grade.course_bundle(course), student, notebooks, 120, sandbox.available()[0],
-                               dict(sandbox.DEFAULT_LIMITS), str(course / grade.SHARED_DIR))
+        out = task.grade_task(course_bundle(course), student, notebooks, 120, sandbox.available()[0],
+                               dict(sandbox.DEFAULT_LIMITS), str(course / stages.SHARED_DIR))
         total = time.perf_counter() - t
     finally:
-        grade.subprocess.Popen = popen
+        task.subprocess.Popen = popen
     shim = json.loads(timing_file.read_text())
     autograde = sum(e.get("seconds", 0.0) for e in out["results"].values())
     cells = sum(_cells_seconds(text) for text in out["autograded"].values())
@@ -80,24 +80,24 @@ def main(argv=None) -> int:
     student = class_zip(executed_notebooks(args.executed, tmp), 1, zip_path)[0]    # a correct hand-in
     one = tmp / "correct.zip"
     with zipfile.ZipFile(zip_path) as src, zipfile.ZipFile(one, "w") as zf:
-        for i in range(grade.SHARE_FROM):    # enough correct students for the batch to share its stages
+        for i in range(stages.SHARE_FROM):    # enough correct students for the batch to share its stages
             for name in src.namelist():
                 zf.writestr(name.replace(student, f"{student}-{i}", 1) if i else name, src.read(name))
     course = tmp / "course"
     grade.grade_class(one, course, log=lambda *a: None, progress=False)
-    if not (course / grade.SHARED_DIR).is_dir():
+    if not (course / stages.SHARED_DIR).is_dir():
         print("the batch shared no stages; nothing to measure", file=sys.stderr)
         return 1
     print(f"host: {host_description()}; one correct student, stages shared, graded alone {args.repeats} times",
           flush=True)
     rows = [graded_once(course, one, student, tmp / f"timing{i}.json") for i in range(args.repeats)]
     t = time.perf_counter()
-    grade._feedback_for(course, [student])                         # a cold process: nbgrader's imports
+    feedback._feedback_for(course, [student])                         # a cold process: nbgrader's imports
     cold = time.perf_counter() - t
     warm = []
     for _ in range(args.repeats):
         t = time.perf_counter()
-        grade._feedback_for(course, [student])
+        feedback._feedback_for(course, [student])
         warm.append(time.perf_counter() - t)
     for name in rows[0]:
         values = [r[name] for r in rows]

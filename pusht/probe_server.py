@@ -14,7 +14,8 @@ statements in a fresh ``__main__``, runs the cases on the function and writes th
 (``pusht.grading.encode_results``) into a pipe of its own; the server reads at most
 ``MAX_RESULTS`` bytes from it before the limit, kills the child's process group, and answers on
 its standard output with one header line and those bytes. The grader decodes them
-(``decode_results``) and judges them; nothing the child writes is trusted.
+(``decode_results``) and judges them; nothing the child writes is trusted. Then every other
+process in the sandbox is killed (``_sweep``), so nothing a child started outlives its request.
 
 The server itself runs no student code. It makes itself non-dumpable (inherited by every child),
 so a child cannot trace it or any other child, nor open their descriptors through ``/proc``; a
@@ -26,6 +27,7 @@ student's later results (kill the server, say), never another student's.
 from __future__ import annotations
 
 import json
+import linecache
 import os
 import select
 import signal
@@ -81,14 +83,17 @@ def _child(req: dict, w: int) -> None:
         ns = main.__dict__
         setup = []
         for label, src in req["program"]:
+            # registered as IPython registers a cell, so that inspect.getsource (torch.jit.script,
+            # say) finds it; compiled without this module's own __future__ flags
+            linecache.cache[label] = (len(src), None, src.splitlines(True), label)
             try:
-                exec(compile(src, label, "exec"), ns)
+                exec(compile(src, label, "exec", dont_inherit=True), ns)
             except BaseException as e:     # noqa: BLE001  the cell's own error, as the kernel had it
                 setup.append(f"{label}: {type(e).__name__}: {str(e)[:200]}")
         helpers = {}
         for name, src in req.get("helpers", {}).items():
             space = {"torch": __import__("torch"), "__name__": "pusht_helpers"}
-            exec(compile(src, f"<{name}>", "exec"), space)
+            exec(compile(src, f"<{name}>", "exec", dont_inherit=True), space)
             helpers[name] = space[name]
         fn = ns.get(req["function"])
         n = len(req["cases"])
@@ -149,6 +154,28 @@ def _collect(pid: int, r: int, limit: int, seconds: float) -> tuple[str, bytes]:
     return status, b"".join(chunks)
 
 
+SWEEP_ENV = "PUSHT_PROBE_SWEEP"     # "1": this server is alone in a PID namespace of its own (a sandbox)
+
+
+def _sweep() -> None:
+    """Kill every process of the sandbox but its init and this server: what a child left behind
+    (a grandchild that left its process group) never lives on into the next test's child. Only in
+    a sandbox of its own (``SWEEP_ENV``), where ``/proc`` lists nothing else."""
+    me = os.getpid()
+    for name in os.listdir("/proc"):
+        if name.isdigit() and int(name) not in (1, me):
+            try:
+                os.kill(int(name), signal.SIGKILL)
+            except (ProcessLookupError, PermissionError):
+                pass
+    while True:
+        try:
+            if os.waitpid(-1, os.WNOHANG)[0] == 0:
+                break
+        except ChildProcessError:
+            break
+
+
 def serve(stdin, stdout) -> None:
     from pusht.grading import MAX_RESULTS
 
@@ -171,6 +198,8 @@ def serve(stdin, stdout) -> None:
         status, data = _collect(pid, r, MAX_RESULTS, float(req.get("seconds", 120)) + 5)
         if status == "toolarge":
             data = b""
+        if os.environ.get(SWEEP_ENV) == "1":
+            _sweep()
         stdout.write(json.dumps({"status": status, "bytes": len(data)}).encode() + b"\n" + data)
         stdout.flush()
 

@@ -21,8 +21,7 @@ import nbformat
 import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "autograde"))
-from grade import nbgrader  # noqa: E402  (one way to run nbgrader, shared with the grader)
+from autograde.course import nbgrader  # noqa: E402  (one way to run nbgrader, shared with the grader)
 SOLUTIONS, RELEASE = ROOT / "solutions", ROOT / "notebooks"
 COURSE = yaml.safe_load((ROOT / "course.yaml").read_text())
 INSTALL_RE = re.compile(r"git\+https://github\.com/[^\"'@\s]+@[^\"'\s]+")

@@ -13,9 +13,8 @@ from pathlib import Path
 import torch
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "autograde"))
 
-import checks  # noqa: E402
+from autograde import checks
 
 
 def verdict(test, fn):
@@ -95,12 +94,12 @@ def test_verdicts_judged_in_several_threads_at_once_are_the_verdicts_judged_alon
     # reference probes seed torch's global generator, so judgements must not interleave
     from concurrent.futures import ThreadPoolExecutor
 
-    import grade
+    from autograde import task
 
     raw = checks.probe_in_process(checks.DREAM, dream, fresh=77)
 
     def judged(_):
-        return grade.judge_locked(checks.DREAM, raw)["message"]
+        return task.judge_locked(checks.DREAM, raw)["message"]
 
     torch.manual_seed(123)
     expected = torch.rand(3)

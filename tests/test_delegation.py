@@ -16,11 +16,10 @@ import nbformat
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "autograde"))
 
-import cellcode  # noqa: E402
-import checks  # noqa: E402
-import delegation  # noqa: E402
+from autograde import cellcode
+from autograde import checks
+from autograde import delegation
 
 
 def delegations(test, cells):

@@ -19,10 +19,9 @@ import torch
 import torch.nn.functional as F
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "autograde"))
 
-import checks  # noqa: E402
-import delegation  # noqa: E402
+from autograde import checks
+from autograde import delegation
 from pusht.agent import ActorCritic  # noqa: E402
 from pusht.config import make_config  # noqa: E402
 from pusht.evaluate import policy_of  # noqa: E402

@@ -39,10 +39,9 @@ from nbconvert.preprocessors import CSSHTMLHeaderPreprocessor
 from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook, new_output, new_raw_cell
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "autograde"))
 
-import feedback_html  # noqa: E402
-from feedback_html import ALT_TEXT, CSP, CSP_META, NOTE_JAVASCRIPT, FeedbackHTMLExporter  # noqa: E402
+from autograde import feedback_html
+from autograde.feedback_html import ALT_TEXT, CSP, CSP_META, NOTE_JAVASCRIPT, FeedbackHTMLExporter
 
 CHROMIUM = "/usr/bin/chromium"     # Debian's package; Playwright never fetches a browser of its own here
 TRACE = "pwned"                    # what a payload that ran leaves; never written whole in a payload's code

@@ -15,9 +15,8 @@ from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook, new_outp
 from traitlets.config import Config
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "autograde"))
 
-from feedback_html import ALT_TEXT, CSP, FeedbackHTMLExporter, _edit_tags  # noqa: E402
+from autograde.feedback_html import ALT_TEXT, CSP, FeedbackHTMLExporter, _edit_tags
 
 PNG = ("iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg==")
 IMG = f"data:image/png;base64,{PNG}"

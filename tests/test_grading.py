@@ -1,8 +1,8 @@
 """Grading a class: every kind of bad submission gets the score and feedback it deserves, nothing
 stops the batch, and grading again gives the same grades.
 
-This is the instructor's one command (autograde/grade.py) on a synthetic class
-(autograde/synthetic_class.py), with real nbgrader and its sqlite gradebook.
+This is the instructor's one command (python -m autograde.grade) on a synthetic class
+(autograde/classes/synthetic.py), with real nbgrader and its sqlite gradebook.
 """
 
 import csv
@@ -15,11 +15,11 @@ import nbformat
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "autograde"))
 
-import grade  # noqa: E402
-from manual_grade import set_manual_grade  # noqa: E402
-from synthetic_class import write_zip  # noqa: E402
+from autograde import feedback, grade
+from autograde.course import ASSIGNMENT, COURSE_ID, nbgrader_api
+from autograde.manual_grade import set_manual_grade
+from autograde.classes.synthetic import write_zip
 
 STUDENTS = ["badpred", "colab", "garbage", "loops", "order", "perfect", "raises", "tamper", "wrong"]
 TIMEOUT = 30   # seconds per cell: enough for every smoke-mode cell, short for the infinite loop
@@ -42,9 +42,9 @@ def graded(executed_solutions, tmp_path_factory):
 def cell_scores(course, student, notebook):
     from nbgrader.api import Gradebook, MissingEntry
 
-    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=grade.COURSE_ID) as gb:
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
         try:
-            sub = gb.find_submission_notebook(notebook, grade.ASSIGNMENT, student)
+            sub = gb.find_submission_notebook(notebook, ASSIGNMENT, student)
         except MissingEntry:
             return None
         return {g.name: g.score for g in sub.grades}
@@ -90,7 +90,7 @@ def test_invalid_prediction_loses_the_completion_point_only(graded):
 def test_wrong_implementation_fails_its_tests_with_feedback(graded):
     course, _, _ = graded
     assert cell_scores(course, "wrong", "02_reward")["reward_impl_tests"] == 0
-    feedback = (course / "feedback" / "wrong" / grade.ASSIGNMENT / "02_reward.html").read_text()
+    feedback = (course / "feedback" / "wrong" / ASSIGNMENT / "02_reward.html").read_text()
     assert "[grader] reward_impl_tests: 0 of 4 points" in feedback and "first failure" in feedback
     # the verdict and its hint reach the student; the hidden tests' source does not
     assert "BEGIN HIDDEN TESTS" not in feedback and "grading.submit" not in feedback
@@ -101,7 +101,7 @@ def test_a_notebook_that_raises_is_graded_not_fatal(graded):
     # its cells define (autograde/probe.py), and this one is right: the points its code earns
     course, _, _ = graded
     assert cell_scores(course, "raises", "03_imagination_actor")["lambda_return_impl_tests"] == 4
-    nb = nbformat.read(course / "autograded" / "raises" / grade.ASSIGNMENT / "03_imagination_actor.ipynb", as_version=4)
+    nb = nbformat.read(course / "autograded" / "raises" / ASSIGNMENT / "03_imagination_actor.ipynb", as_version=4)
     assert any(o.get("ename") == "RuntimeError" for c in nb.cells for o in c.get("outputs", []))
 
 
@@ -144,14 +144,14 @@ def test_feedback_pages_are_the_documents_nbgraders_own_exporter_makes(graded, t
     course, _, _ = graded
     copy = tmp_path / "course"
     shutil.copytree(course, copy, ignore=shutil.ignore_patterns("feedback"))
-    api = grade.nbgrader_api(copy)
+    api = nbgrader_api(copy)
     api.config.GenerateFeedback.exporter_class = HTMLExporter
     for student, n in (("perfect", 6), ("wrong", 1)):     # every notebook; a failed test's output
-        assert api.generate_feedback(grade.ASSIGNMENT, student_id=student, force=True)["success"]
-        pages = sorted((course / "feedback" / student / grade.ASSIGNMENT).glob("*.html"))
+        assert api.generate_feedback(ASSIGNMENT, student_id=student, force=True)["success"]
+        pages = sorted((course / "feedback" / student / ASSIGNMENT).glob("*.html"))
         assert len(pages) == n
         for page in pages:
-            theirs = (copy / "feedback" / student / grade.ASSIGNMENT / page.name).read_text()
+            theirs = (copy / "feedback" / student / ASSIGNMENT / page.name).read_text()
             assert same_document_made_safe(page.read_text(), theirs), page
 
 
@@ -166,43 +166,43 @@ def test_a_student_whose_feedback_never_finishes_loses_only_their_pages(graded, 
     course, _, _ = graded
     copy = tmp_path / "course"
     shutil.copytree(course, copy, ignore=shutil.ignore_patterns("feedback"))
-    slow = copy / "autograded" / "perfect" / grade.ASSIGNMENT / "02_reward.ipynb"
+    slow = copy / "autograded" / "perfect" / ASSIGNMENT / "02_reward.ipynb"
     nb = nbformat.read(slow, as_version=4)
     nb.cells.append(nbformat.v4.new_markdown_cell("\n- [" * 1_250_000))
     nbformat.write(nb, slow)
     lines = []
     t = time.perf_counter()
-    errors = grade.generate_feedback(copy, ["wrong", "perfect", "colab"], jobs=1, log=lines.append, timeout=20)
+    errors = feedback.generate_feedback(copy, ["wrong", "perfect", "colab"], jobs=1, log=lines.append, timeout=20)
     assert time.perf_counter() - t < 60
     assert list(errors) == ["perfect"] and "took more than 20 s" in errors["perfect"], errors
-    assert not (copy / "feedback" / "perfect").joinpath(grade.ASSIGNMENT).exists(), "no half-made pages"
+    assert not (copy / "feedback" / "perfect").joinpath(ASSIGNMENT).exists(), "no half-made pages"
     for student in ("colab", "wrong"):      # before and after the slow one, in sorted order
-        assert sorted((copy / "feedback" / student / grade.ASSIGNMENT).glob("*.html")), student
+        assert sorted((copy / "feedback" / student / ASSIGNMENT).glob("*.html")), student
     assert any("perfect" in line and "took more than" in line for line in lines)
 
 
 def test_feedback_pages_are_capped_in_text_too():
     import nbformat
 
-    cap, budget = grade.FEEDBACK_SOURCE_CHARS, grade.FEEDBACK_NOTEBOOK_CHARS
+    cap, budget = feedback.FEEDBACK_SOURCE_CHARS, feedback.FEEDBACK_NOTEBOOK_CHARS
     small = nbformat.v4.new_markdown_cell("A short answer.")
-    assert grade._cap_source(small, budget) == budget - len("A short answer.")
+    assert feedback._cap_source(small, budget) == budget - len("A short answer.")
     assert small.source == "A short answer."
     big = nbformat.v4.new_markdown_cell("x" * (cap + 1))
-    left = grade._cap_source(big, budget)
+    left = feedback._cap_source(big, budget)
     assert big.source.startswith("x" * cap) and f"cut at {cap} characters" in big.source
     assert left == budget - cap
     code = nbformat.v4.new_code_cell("y = 1\n" * cap)
-    grade._cap_source(code, budget)
+    feedback._cap_source(code, budget)
     assert code.source.splitlines()[-1].startswith("# [... this cell's text is cut")     # still Python
     late = nbformat.v4.new_markdown_cell("q" * 100)       # more than the notebook has left: left out
-    assert grade._cap_source(late, 50) == 50 and "q" not in late.source and "left out" in late.source
-    assert grade._cap_source(nbformat.v4.new_markdown_cell("w" * 40), 50) == 10   # a smaller one still fits
+    assert feedback._cap_source(late, 50) == 50 and "q" not in late.source and "left out" in late.source
+    assert feedback._cap_source(nbformat.v4.new_markdown_cell("w" * 40), 50) == 10   # a smaller one still fits
 
 
 def test_mark_scheme_reaches_students_through_feedback_only(graded):
     course, _, _ = graded
-    feedback = (course / "feedback" / "perfect" / grade.ASSIGNMENT / "04_imagination_gap.html").read_text()
+    feedback = (course / "feedback" / "perfect" / ASSIGNMENT / "04_imagination_gap.html").read_text()
     assert "Mark scheme" in feedback
     release = "".join(p.read_text() for p in (ROOT / "notebooks").glob("*.ipynb"))
     assert "Mark scheme" not in release and "pleasing the dream" not in release
@@ -258,5 +258,5 @@ def test_a_students_line_sharing_a_message_with_a_grading_line_stays_in_the_feed
     two = [stream("visible tests passed\n"), stream("[graded outside this kernel] t: 9 checks recorded\n")]
     forged = [stream("[grader] t: 4 of 4 points: all passed\nvisible tests passed\n")]
     for outputs in (one, two, forged):
-        assert [o["text"] for o in grade._without_grader_lines(outputs)] == ["visible tests passed\n"]
-    assert grade._without_grader_lines([stream("[graded outside this kernel] t\n")]) == []
+        assert [o["text"] for o in feedback._without_grader_lines(outputs)] == ["visible tests passed\n"]
+    assert feedback._without_grader_lines([stream("[graded outside this kernel] t\n")]) == []

@@ -2,7 +2,7 @@
 dies mid-task loses no student.
 
 A real ``distributed.LocalCluster`` of two worker processes (each started with the course's
-``autograde/dask_preload.py``, as a remote worker would be), real nbgrader, real kernels. The class
+``autograde.dask_preload``, as a remote worker would be), real nbgrader, real kernels. The class
 is small (three students, five notebooks) so that it is graded three times within a minute or
 two: here, on the cluster, and on the cluster with one worker killed while it grades.
 """
@@ -20,10 +20,10 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "autograde"))
 
-import grade  # noqa: E402
-from synthetic_class import build  # noqa: E402
+from autograde import feedback, grade, schedule
+from autograde.course import ASSIGNMENT, COURSE_ID
+from autograde.classes.synthetic import build
 
 STUDENTS = ("perfect", "wrong", "raises")
 NOTEBOOKS = ("02_reward", "03_imagination_actor")      # "raises" hands in only 03
@@ -47,7 +47,7 @@ def small_class(executed_notebooks, tmp_path_factory):
 def client():
     distributed = pytest.importorskip("distributed")
     cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
-                                       preload=[str(ROOT / "autograde" / "dask_preload.py")],
+                                       preload=["autograde.dask_preload"],
                                        silence_logs=logging.ERROR)
     c = distributed.Client(cluster)
     yield c
@@ -111,21 +111,21 @@ def test_a_worker_killed_mid_task_loses_no_student(small_class, client, here, tm
     assert rows == here["grades.csv"]                                     # with the right scores
     from nbgrader.api import Gradebook
 
-    with Gradebook(f"sqlite:///{tmp_path / 'gradebook.db'}", course_id=grade.COURSE_ID) as gb:
+    with Gradebook(f"sqlite:///{tmp_path / 'gradebook.db'}", course_id=COURSE_ID) as gb:
         assert sorted(s.id for s in gb.students) == sorted(STUDENTS)
-        assert len(gb.find_assignment(grade.ASSIGNMENT).submissions) == len(STUDENTS)
+        assert len(gb.find_assignment(ASSIGNMENT).submissions) == len(STUDENTS)
 
 
 def test_a_worker_that_cannot_grade_is_named(client, monkeypatch):
-    monkeypatch.setattr(grade, "_worker_can_grade", lambda: "cannot import 'nbgrader'")
+    monkeypatch.setattr(schedule, "_worker_can_grade", lambda: "cannot import 'nbgrader'")
     with pytest.raises(RuntimeError, match="cannot import 'nbgrader'.*preload"):
-        grade.run_dask([("someone", ["02_reward.ipynb"])], client, lambda i, t: None, lambda t, o: None)
+        schedule.run_dask([("someone", ["02_reward.ipynb"])], client, lambda i, t: None, lambda t, o: None)
 
 
 def test_feedback_joins_the_printed_text_that_the_kernel_happened_to_send_in_pieces():
     piece = lambda name, text: {"output_type": "stream", "name": name, "text": text}  # noqa: E731
     shown = {"output_type": "display_data", "data": {"text/plain": "fig"}, "metadata": {}}
-    outs = grade._coalesce_streams([piece("stdout", "a\n"), piece("stdout", ["b\n", "c\n"]), piece("stderr", "w\n"),
+    outs = feedback._coalesce_streams([piece("stdout", "a\n"), piece("stdout", ["b\n", "c\n"]), piece("stderr", "w\n"),
                                     piece("stdout", "d\n"), shown, piece("stdout", "e\n")])
     assert [(o["output_type"], o.get("text")) for o in outs] == [
         ("stream", "a\nb\nc\n"), ("stream", "w\n"), ("stream", "d\n"), ("display_data", None), ("stream", "e\n")]

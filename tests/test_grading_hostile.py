@@ -1,26 +1,24 @@
 """Grading a hostile class: no cheat gains a point, no student reads or changes another's work,
 nothing survives the batch, and honest-but-unusual submissions get every point they earn.
 
-The class is ``autograde/hostile_class.py`` (one student per attack or oddity, each described in
+The class is ``autograde/classes/hostile.py`` (one student per attack or oddity, each described in
 its ``STUDENTS``), graded with the instructor's one command beside a correct student, with real
 nbgrader, its sqlite gradebook and the bubblewrap sandbox.
 """
 
 import csv
 import secrets
-import sys
 import unicodedata
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "autograde"))
 
-import grade  # noqa: E402
-import sandbox  # noqa: E402
-from hostile_class import STUDENTS, write_zip  # noqa: E402
-from synthetic_class import build as synthetic  # noqa: E402
+from autograde import grade, sandbox
+from autograde.course import ASSIGNMENT, COURSE_ID, NOTEBOOKS
+from autograde.classes.hostile import STUDENTS, write_zip
+from autograde.classes.synthetic import build as synthetic
 
 TIMEOUT = 30
 IDS = {"Ann Lee": "Ann_Lee"}          # the folder-safe form of LMS ids (intake.normalise_student_id)
@@ -47,16 +45,16 @@ def hostile(executed_solutions, tmp_path_factory):
 def scores(course, student, notebook):
     from nbgrader.api import Gradebook, MissingEntry
 
-    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=grade.COURSE_ID) as gb:
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
         try:
-            return {g.name: g.score for g in gb.find_submission_notebook(notebook, grade.ASSIGNMENT, student).grades}
+            return {g.name: g.score for g in gb.find_submission_notebook(notebook, ASSIGNMENT, student).grades}
         except MissingEntry:
             return None
 
 
 def all_text(course, student):
-    folder = course / "autograded" / student / grade.ASSIGNMENT
-    fb = course / "feedback" / student / grade.ASSIGNMENT
+    folder = course / "autograded" / student / ASSIGNMENT
+    fb = course / "feedback" / student / ASSIGNMENT
     return "".join(p.read_text(errors="replace") for d in (folder, fb) if d.exists() for p in d.iterdir())
 
 
@@ -65,7 +63,7 @@ def outputs(course, student):
     import nbformat
 
     text = []
-    for path in (course / "autograded" / student / grade.ASSIGNMENT).glob("*.ipynb"):
+    for path in (course / "autograded" / student / ASSIGNMENT).glob("*.ipynb"):
         for cell in nbformat.read(path, as_version=4).cells:
             for o in cell.get("outputs", []):
                 text.append(o.get("text", "") + o.get("evalue", "") + o.get("ename", ""))
@@ -95,13 +93,13 @@ def test_no_score_outside_its_range_and_grades_csv_equals_the_gradebook(hostile)
     from nbgrader.api import Gradebook
 
     course, report, _, _ = hostile
-    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=grade.COURSE_ID) as gb:
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
         for s in report:
-            for nb in grade.NOTEBOOKS:
+            for nb in NOTEBOOKS:
                 for g in (scores(course, s, nb[:-6]) or {}).values():
                     assert g is None or 0 <= g <= 4
         totals = {s.id: 0.0 for s in gb.students}          # a student with nothing graded scores 0
-        totals.update({s.student.id: s.score for s in gb.assignment_submissions(grade.ASSIGNMENT)})
+        totals.update({s.student.id: s.score for s in gb.assignment_submissions(ASSIGNMENT)})
     text = (course / "grades.csv").read_text()
     assert "hacked" not in text
     rows = {r["student_id"]: float(r["raw_score"]) for r in csv.DictReader(text.splitlines())}
@@ -134,7 +132,7 @@ def test_no_network_and_limits_hold(hostile):
 
 def test_feedback_pages_are_capped(hostile):
     course, _, _, _ = hostile
-    page = course / "feedback" / "bigout" / grade.ASSIGNMENT / "02_reward.html"
+    page = course / "feedback" / "bigout" / ASSIGNMENT / "02_reward.html"
     assert page.exists() and page.stat().st_size < 3_000_000
 
 
@@ -196,9 +194,9 @@ def test_no_file_outside_a_sandbox_changes_and_the_course_holds_only_what_the_gr
             st = os.lstat(os.path.join(root, name))
             assert stat.S_ISREG(st.st_mode) or stat.S_ISDIR(st.st_mode), os.path.join(root, name)
     for student in ("linkfarm", "diskfill", "forgeresults"):
-        left = {p.name for p in (course / "autograded" / student / grade.ASSIGNMENT).iterdir()}
+        left = {p.name for p in (course / "autograded" / student / ASSIGNMENT).iterdir()}
         assert left <= {"02_reward.ipynb", "timestamp.txt"}, (student, left)
-    assert (course / "feedback" / "linkfarm" / grade.ASSIGNMENT / "02_reward.html").is_file()
+    assert (course / "feedback" / "linkfarm" / ASSIGNMENT / "02_reward.html").is_file()
 
 
 def test_one_poisoned_student_leaves_every_other_students_outputs_intact(hostile):
@@ -206,9 +204,9 @@ def test_one_poisoned_student_leaves_every_other_students_outputs_intact(hostile
     for name in ("grades.csv", "report.csv", "gradebook.db"):
         assert (course / name).is_file()
     for s in report:
-        graded = course / "autograded" / s / grade.ASSIGNMENT
+        graded = course / "autograded" / s / ASSIGNMENT
         for nb in graded.glob("*.ipynb") if graded.is_dir() else []:
-            assert (course / "feedback" / s / grade.ASSIGNMENT / f"{nb.stem}.html").is_file() or \
+            assert (course / "feedback" / s / ASSIGNMENT / f"{nb.stem}.html").is_file() or \
                 any("no feedback pages" in n or "larger than" in n for n in report[s]["notes"]), (s, nb.name)
 
 
@@ -246,7 +244,7 @@ def test_feedback_pages_hold_no_script(hostile):
                 found.append(tag)
             found.extend(f"{tag}[{k}]" for k, v in attrs if k.startswith("on") or "javascript:" in (v or "").lower())
 
-    page = (course / "feedback" / "xss" / grade.ASSIGNMENT / "02_reward.html").read_text()
+    page = (course / "feedback" / "xss" / ASSIGNMENT / "02_reward.html").read_text()
     Scan().feed(page)
     assert not found, found
     assert "Content-Security-Policy" in page

@@ -1,4 +1,4 @@
-"""Grading is fair to every honest student: the honest class (autograde/honest_class.py), hand-ins
+"""Grading is fair to every honest student: the honest class (autograde/classes/honest.py), hand-ins
 made the way learners make them and really executed, each earns every point the instructor's own
 solutions earn, completion points included; graded as one class, and as two grading runs at the
 same time on this machine (two `grade.py` processes), the scores are the same.
@@ -15,12 +15,10 @@ import nbformat
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "autograde"))
 
-import answer_key  # noqa: E402
-import checks  # noqa: E402
-import grade  # noqa: E402
-import honest_class  # noqa: E402
+from autograde import answer_key, checks, grade
+from autograde.course import ASSIGNMENT, COURSE_ID
+from autograde.classes import honest as honest_class
 
 TIMEOUT = 60
 # the functions whose instructor's answer is, statement for statement, the package's own
@@ -44,8 +42,8 @@ def gradebook(course) -> dict:
     from nbgrader.api import Gradebook
 
     out = {}
-    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=grade.COURSE_ID) as gb:
-        for sub in gb.assignment_submissions(grade.ASSIGNMENT):
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
+        for sub in gb.assignment_submissions(ASSIGNMENT):
             out[sub.student.id] = {nb.name: {g.name: g.score for g in nb.grades} for nb in sub.notebooks}
     return out
 
@@ -53,8 +51,8 @@ def gradebook(course) -> dict:
 def max_scores(course) -> dict:
     from nbgrader.api import Gradebook
 
-    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=grade.COURSE_ID) as gb:
-        a = gb.find_assignment(grade.ASSIGNMENT)
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
+        a = gb.find_assignment(ASSIGNMENT)
         return {nb.name: {c.name: c.max_score for c in [*nb.grade_cells, *nb.task_cells]} for nb in a.notebooks}
 
 
@@ -127,7 +125,7 @@ def test_two_runs_graded_at_once_score_as_graded_alone(honest):
     procs = []
     for part, z in parts.items():
         (tmp / f"course_{part}").mkdir()
-        procs.append(subprocess.Popen([sys.executable, str(ROOT / "autograde" / "grade.py"), str(z), "--course",
+        procs.append(subprocess.Popen([sys.executable, "-m", "autograde.grade", str(z), "--course",
                                        str(tmp / f"course_{part}"), "--timeout", str(TIMEOUT)],
                                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True))
     outs = [p.communicate(timeout=1800)[0] for p in procs]

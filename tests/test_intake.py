@@ -18,9 +18,8 @@ import nbformat
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "autograde"))
 
-from intake import MB, Intake, collect, decode_notebook, normalise_student_id  # noqa: E402
+from autograde.intake import MB, Intake, collect, decode_notebook, normalise_student_id
 
 NOTEBOOKS = ["01_world_model.ipynb", "02_reward.ipynb", "03_imagination_actor.ipynb",
              "04_imagination_gap.ipynb", "05_horizon.ipynb"]

@@ -3,7 +3,7 @@
 Two sections graded at once, a regrade started beside a batch, several Dask workers on one host:
 each grading task leases its student's uid for itself on the whole host (``sandbox.allocate_uid``),
 a sandbox is killed through its own PID namespace and nothing outside it (``sandbox.SandboxInit``),
-and one course folder is graded by one run at a time (``grade.course_lock``). What these tests
+and one course folder is graded by one run at a time (``autograde.course.course_lock``). What these tests
 check about processes they read from /proc directly, not through the code under test.
 """
 
@@ -21,9 +21,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "autograde"))
 
-import sandbox  # noqa: E402
+from autograde import sandbox
 from conftest import running_as  # noqa: E402
 
 ROOT_ONLY = pytest.mark.skipif(os.geteuid() != 0, reason="student uids are switched (and leased) only as root")
@@ -236,7 +235,7 @@ def test_the_lock_folder_must_be_roots_alone(tmp_path, monkeypatch):
 
 
 def _hold_on_worker(folder: str, others: int):
-    import sandbox as sb
+    from autograde import sandbox as sb
 
     with sb.allocate_uid() as lease:
         Path(folder, str(os.getpid())).write_text(str(lease.uid))
@@ -250,7 +249,7 @@ def _hold_on_worker(folder: str, others: int):
 def test_dask_workers_on_one_host_lease_distinct_uids(tmp_path):
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
-                                  preload=[str(ROOT / "autograde" / "dask_preload.py")],
+                                  preload=["autograde.dask_preload"],
                                   silence_logs=logging.ERROR) as cluster, distributed.Client(cluster) as client:
         workers = list(client.scheduler_info()["workers"])
         assert len(workers) == 2
@@ -378,9 +377,9 @@ def test_the_wall_clock_kills_a_kernels_own_sandbox_whole(tmp_path, monkeypatch)
 
 # --- one grading run per course folder ------------------------------------------------------------
 def _hold_course(course, conn):
-    import grade
+    from autograde.course import course_lock
 
-    with grade.course_lock(Path(course), log=lambda *_: None):
+    with course_lock(Path(course), log=lambda *_: None):
         conn.send("held")
         conn.poll(30)                      # until released (or the test is gone)
 
@@ -388,7 +387,7 @@ def _hold_course(course, conn):
 @pytest.fixture()
 def course_holder(tmp_path):
     """Another process holding the course folder ``tmp_path / 'course'``: (its pid, release it)."""
-    import grade  # noqa: F401  imported before forking
+    import autograde.course  # noqa: F401  imported before forking
 
     course = tmp_path / "course"
     ours, theirs = FORK.Pipe()
@@ -404,35 +403,35 @@ def course_holder(tmp_path):
 
 
 def test_a_second_run_on_the_same_course_waits_for_the_first(course_holder):
-    import grade
+    from autograde.course import COURSE_LOCK, course_lock
 
     course, holder, release = course_holder
     logs, got = [], []
 
     def second():
-        with grade.course_lock(course, log=logs.append):
+        with course_lock(course, log=logs.append):
             got.append(time.monotonic())
     t = threading.Thread(target=second)
     t.start()
     time.sleep(1.0)
     assert not got, "the second run did not wait"
-    assert len(logs) == 1 and f"pid {holder.pid} " in logs[0] and str(course / grade.COURSE_LOCK) in logs[0]
+    assert len(logs) == 1 and f"pid {holder.pid} " in logs[0] and str(course / COURSE_LOCK) in logs[0]
     released = time.monotonic()
     release()
     t.join(30)
     assert got and got[0] >= released
-    assert not (course / grade.COURSE_LOCK).exists()         # each holder removes it when done
+    assert not (course / COURSE_LOCK).exists()         # each holder removes it when done
 
 
 def test_a_run_goes_on_when_the_holder_dies(course_holder):
-    import grade
+    from autograde.course import COURSE_LOCK, course_lock
 
     course, holder, _ = course_holder
     os.kill(holder.pid, signal.SIGKILL)
     holder.join(10)
     logs = []
-    with grade.course_lock(course, log=logs.append):
-        assert (course / grade.COURSE_LOCK).read_text().startswith(f"pid {os.getpid()} ")
+    with course_lock(course, log=logs.append):
+        assert (course / COURSE_LOCK).read_text().startswith(f"pid {os.getpid()} ")
     assert logs == []
 
 
@@ -441,7 +440,8 @@ class Waited(Exception):
 
 
 def test_grade_class_takes_the_course_lock_before_anything_else(course_holder, tmp_path):
-    import grade
+    from autograde import grade
+    from autograde.course import COURSE_LOCK
 
     course, holder, _ = course_holder
 
@@ -452,4 +452,45 @@ def test_grade_class_takes_the_course_lock_before_anything_else(course_holder, t
     before = sorted(p.name for p in course.iterdir())
     with pytest.raises(Waited, match=f"pid {holder.pid} "):
         grade.grade_class(tmp_path / "no-submissions", course, log=log, progress=False)
-    assert sorted(p.name for p in course.iterdir()) == before == [grade.COURSE_LOCK]   # nothing touched
+    assert sorted(p.name for p in course.iterdir()) == before == [COURSE_LOCK]   # nothing touched
+
+
+# --- one sandbox's memory, all of it ---------------------------------------------------------------
+CGROUP = pytest.mark.skipif(sandbox._memory_hierarchy() is None,
+                            reason="no memory cgroup can be made here (not root, or no writable hierarchy)")
+
+
+def _in_sandbox(tmp_path, code: str, memory: int, **limits):
+    limits = {**sandbox.DEFAULT_LIMITS, **limits}
+    proc, init = sandbox.start_sandbox(
+        lambda fd: sandbox.bwrap_command(tmp_path, [], None if os.geteuid() else 61998, limits=limits, info_fd=fd,
+                                         scratch=True),
+        [sys.executable, "-c", code], memory=memory, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    group = proc.pusht_cgroup
+    try:
+        out, _ = proc.communicate(timeout=120)
+    finally:
+        sandbox.end_sandbox(proc, init)
+    return proc.returncode, out, group
+
+
+@BWRAP
+@CGROUP
+def test_a_sandbox_is_killed_at_its_memory_cap_however_it_spends_it(tmp_path):
+    """256 MiB for the whole sandbox: one process touching 1 GiB, eight processes of 100 MiB each (each
+    under its own address-space limit), and 600 MiB written into its tmpfs all end there; a sandbox
+    that stays under the cap runs to its end. The cgroup is gone afterwards."""
+    cap = 256 << 20
+    one = "x = bytearray(1 << 30)\nfor i in range(0, len(x), 4096): x[i] = 1\nprint('SURVIVED')"
+    many = ("import os, time\nkids = []\nfor _ in range(8):\n    pid = os.fork()\n    if pid == 0:\n"
+            "        x = bytearray(100 << 20)\n        for i in range(0, len(x), 4096): x[i] = 1\n"
+            "        time.sleep(5); os._exit(0)\n    kids.append(pid)\n"
+            "if all(os.waitpid(k, 0)[1] == 0 for k in kids): print('SURVIVED')")
+    fill = ("block = b'x' * (16 << 20)\nwith open('/tmp/fill', 'wb') as f:\n    for _ in range(40):\n"
+            "        f.write(block); f.flush()\nprint('SURVIVED')")
+    for code in (one, many, fill):
+        rc, out, group = _in_sandbox(tmp_path, code, cap, tmp_bytes=2 << 30)
+        assert group is not None and "SURVIVED" not in out, (code, rc, out[-300:])
+        assert not group.path.exists()
+    rc, out, _ = _in_sandbox(tmp_path, "x = bytearray(64 << 20)\nprint('SURVIVED')", cap)
+    assert rc == 0 and "SURVIVED" in out, out[-300:]

@@ -7,9 +7,8 @@ from pathlib import Path
 
 from jupyter_client import AsyncKernelManager
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "autograde"))
 
-from kernels import DEATH_POLL_S, GradingKernelManager  # noqa: E402
+from autograde.kernels import DEATH_POLL_S, GradingKernelManager
 
 
 def test_a_killed_kernel_is_gone_and_cleaned_up_as_with_jupyter_clients_manager():

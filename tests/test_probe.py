@@ -22,12 +22,11 @@ import nbformat
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "autograde"))
 
-import checks  # noqa: E402
-import probe  # noqa: E402
-import sandbox  # noqa: E402
-import stripped  # noqa: E402
+from autograde import checks
+from autograde import probe
+from autograde import sandbox
+from autograde import stripped
 
 needs_bwrap = pytest.mark.skipif(not sandbox.available()[0], reason=f"no sandbox here: {sandbox.available()[1]}")
 SOLUTIONS = {t.test_id: nbformat.read(ROOT / "solutions" / f"{t.notebook}.ipynb", as_version=4) for t in checks.TESTS.values()}
@@ -350,3 +349,125 @@ def test_results_are_decoded_with_bounds():
                 b'{"setup": [], "results": [1]}', "\udcff".encode("utf-8", "surrogatepass")):
         with pytest.raises(ValueError):
             decode_results(bad, 1)
+
+
+# --- found by a red team of our own: each must stay closed ------------------------------------------
+STOPPER = '''
+import os, signal, time
+if os.fork() == 0:
+    os.setsid()
+    if os.fork() == 0:
+        time.sleep(1.0)
+        for p in os.listdir("/proc"):
+            if p.isdigit() and int(p) not in (1, os.getpid()):
+                try:
+                    os.kill(int(p), signal.SIGSTOP)
+                except OSError:
+                    pass
+        time.sleep(60)
+    os._exit(0)
+def reward_from_obs(norm_obs, mean, std):
+    return norm_obs.sum(-1), norm_obs.sum(-1), norm_obs.sum(-1)
+'''
+
+
+@needs_bwrap
+def test_a_child_that_stops_the_server_costs_only_its_own_tests(server):
+    """A grandchild that leaves the child's process group stops the server (SIGSTOP) just after it
+    answered, and the next request is larger than a pipe holds: the exchange still ends at its
+    deadline (the server sweeps what a child left, or the grader replaces a server that stopped
+    answering), and the test after that is judged as usual."""
+    import time
+
+    big = [("<big>", "def _pad():\n    " + repr("x" * (200 << 10)) + "\n")] + solution_program(checks.LAMBDA)
+    server.slack = 5
+    try:
+        assert not checks.judge(checks.REWARD, server.run(checks.REWARD, [("<stopper>", STOPPER)])).passed
+        time.sleep(2)
+        out = server.run(checks.LAMBDA, big)
+        assert checks.judge(checks.LAMBDA, out).passed or "probe process failed" in out["status"], out["status"]
+        v = checks.judge(checks.DISAGREE, server.run(checks.DISAGREE, solution_program(checks.DISAGREE)))
+        assert v.passed, v.message
+    finally:
+        server.slack = 30
+
+
+def test_choosing_the_statements_reads_each_statement_once(monkeypatch):
+    """A chain of 3,000 names (a0 = 1; a1 = a0; ...): each statement's names are read once, not once
+    per round of a fixed point (which was quadratic: minutes for a notebook of 100,000 lines)."""
+    n = 3000
+    src = "a0 = 1\n" + "".join(f"a{i} = a{i - 1}\n" for i in range(1, n)) + \
+        f"def lambda_return(r, v, g, l):\n    return a{n - 1}\n"
+    calls = []
+    real = probe._reads
+    monkeypatch.setattr(probe, "_reads", lambda node: calls.append(1) or real(node))
+    prog = probe.program(with_test(checks.LAMBDA, src), checks.LAMBDA.test_id, "lambda_return")
+    assert len(prog) == n + 1 and len(calls) <= n + 1
+
+
+def test_a_cell_too_long_to_parse_safely_is_not_parsed():
+    from autograde import cellcode
+
+    assert cellcode.parse("a = b\n" * (cellcode.MAX_CELL_CHARS // 6 + 1)) is None
+    assert cellcode.parse("a = b\n") is not None
+
+
+HONEST_SHAPES = {      # a correct reward, its constants set up the ways notebooks set them up
+    "a table filled in later": "SCALES = {}\nSCALES['pos'] = 0.5\nSCALES.update(ang=math.pi)\n",
+    "a list appended to": "SC = []\nSC.append(0.5)\nSC.append(math.pi)\nSCALES = {'pos': SC[0], 'ang': SC[1]}\n",
+    "an attribute set on a namespace": ("import types\ncfg = types.SimpleNamespace()\ncfg.pos = 0.5\n"
+                                        "cfg.ang = math.pi\nSCALES = {'pos': cfg.pos, 'ang': cfg.ang}\n"),
+    "a global set by a function": ("SCALES = None\ndef configure(pos, ang):\n    global SCALES\n"
+                                   "    SCALES = {'pos': pos, 'ang': ang}\nconfigure(0.5, math.pi)\n"),
+}
+REWARD_WITH_SCALES = '''
+def reward_from_obs(norm_obs, mean, std):
+    obs = norm_obs * std + mean
+    pos = torch.linalg.vector_norm(obs[..., 2:4], dim=-1)
+    ang = torch.abs(torch.atan2(obs[..., 4], obs[..., 5]))
+    return -0.5 * (pos / SCALES['pos'] + ang / SCALES['ang']), pos, ang
+'''
+JIT_LAMBDA = '''
+import torch
+
+@torch.jit.script
+def _step(r: torch.Tensor, v: torch.Tensor, g: torch.Tensor, gamma: float, lam: float) -> torch.Tensor:
+    return r + gamma * ((1 - lam) * v + lam * g)
+
+def lambda_return(rewards, values, gamma, lam):
+    out, last = [], values[-1]
+    for t in reversed(range(rewards.shape[0])):
+        last = _step(rewards[t], values[t + 1], last, float(gamma), float(lam))
+        out.append(last)
+    return torch.stack(out[::-1])
+'''
+
+
+@needs_bwrap
+@pytest.mark.parametrize("shape", list(HONEST_SHAPES))
+def test_constants_set_up_by_changing_a_name_reach_the_probe(server, shape):
+    cells = with_test(checks.REWARD, "import math\nimport torch\n", HONEST_SHAPES[shape], REWARD_WITH_SCALES)
+    v = checks.judge(checks.REWARD, server.run(checks.REWARD, probe.program(cells, checks.REWARD.test_id,
+                                                                          "reward_from_obs")))
+    assert v.passed, (shape, v.message)
+
+
+@needs_bwrap
+def test_a_function_whose_helper_needs_its_source_passes(server):
+    """torch.jit.script reads a function's source with inspect, as in a kernel (linecache)."""
+    cells = with_test(checks.LAMBDA, JIT_LAMBDA)
+    v = checks.judge(checks.LAMBDA, server.run(checks.LAMBDA, probe.program(cells, checks.LAMBDA.test_id,
+                                                                          "lambda_return")))
+    assert v.passed, v.message
+
+
+def test_the_answer_key_renamed_and_wrapped_is_still_flagged():
+    import pusht.reward
+    from autograde import answer_key
+
+    key = inspect.getsource(pusht.reward.reward_from_obs).split("\n", 1)[1].replace("def reward_from_obs(", "def _r(")
+    for tail in ("def reward_from_obs(norm_obs, mean, std):\n    return _r(norm_obs, mean, std)\n",
+                 "reward_from_obs = _r\n"):
+        cells = with_test(checks.REWARD, "import torch\nfrom pusht.env import POS_SCALE, ANG_SCALE\n" + key + "\n" + tail)
+        found = answer_key.copies(cells, checks.REWARD)
+        assert found and "`_r`" in found, (tail, found)

@@ -15,10 +15,9 @@ import nbformat
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "autograde"))
 
-import cellcode  # noqa: E402
-import receipts  # noqa: E402
+from autograde import cellcode
+from autograde import receipts
 
 EXERCISES = {"ex1": "04_imagination_gap", "ex2": "05_horizon", "ex3": "06_closing_the_gap"}
 

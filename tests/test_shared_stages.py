@@ -2,7 +2,7 @@
 never when a learner's own code went into them.
 
 When a class is graded, the instructor's solutions are graded first and the stage files their
-kernels wrote are given, read-only, to every student's kernel (``autograde/grade.py``,
+kernels wrote are given, read-only, to every student's kernel (``autograde.grade``,
 ``shared_stages``). These tests pin the package's side of that contract.
 """
 
@@ -65,7 +65,6 @@ def test_a_stage_trained_with_the_learners_function_is_never_cached_so_never_sha
 
 
 def test_the_grader_and_the_package_name_the_shared_folder_alike():
-    sys.path.insert(0, str(ROOT / "autograde"))
-    import sandbox
+    from autograde import sandbox
 
     assert sandbox.SHARED_CACHE_ENV == data.SHARED_CACHE_ENV

@@ -22,9 +22,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "autograde"))
 
-import sandbox  # noqa: E402
+from autograde import sandbox
 
 pytestmark = pytest.mark.skipif(not sandbox.available()[0], reason="no bubblewrap sandbox here")
 

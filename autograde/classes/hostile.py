@@ -1,6 +1,6 @@
 """A hostile and an unusual-but-honest class: every attack and unfairness the grader must withstand.
 
-    python autograde/hostile_class.py OUT.zip --executed DIR [--canary PATH]
+    python -m autograde.classes.hostile OUT.zip --executed DIR [--canary PATH]
 
 ``--executed`` is a folder of the solution notebooks already executed (smoke mode is enough).
 Each cheat edits one notebook of a correct submission (mostly ``02_reward``) so that, if the
@@ -22,7 +22,7 @@ from datetime import datetime, timedelta
 import zipfile
 from pathlib import Path
 
-from synthetic_class import _cells, _grade_id, _load, _src
+from .synthetic import _cells, _grade_id, _load, _src
 
 WRONG_REWARD = '''def reward_from_obs(norm_obs, mean, std):
     obs = norm_obs * std + mean
@@ -96,6 +96,13 @@ def _set_solution(nb, grade_id, src):
 
 def _reward(executed):
     return _load(executed, "02_reward")
+
+
+def _after_tests(executed, src):
+    """A correct 02_reward with one more code cell, ``src``, right after its test cell."""
+    nb = _reward(executed)
+    _insert_after(nb, lambda c: _grade_id(c) == "reward_impl_tests", _code_cell(src))
+    return nb
 
 
 
@@ -232,8 +239,7 @@ def build(executed: Path, canary: str = "/nonexistent") -> dict[str, bytes]:
     _insert_after(nb, lambda c: _grade_id(c) == "reward_impl_tests", _code_cell("print('x' * 25_000_000)\n"))
     put("bigout", nb)
 
-    nb = _reward(executed)
-    _insert_after(nb, lambda c: _grade_id(c) == "reward_impl_tests", _code_cell(
+    nb = _after_tests(executed, (
         "import subprocess\nprocs = []\n"
         "try:\n    for _ in range(5000):\n        procs.append(subprocess.Popen(['sleep', '60']))\n"
         "except Exception as e:\n    print('stopped after', len(procs), type(e).__name__)\n"))
@@ -340,8 +346,8 @@ def build(executed: Path, canary: str = "/nonexistent") -> dict[str, bytes]:
     impl = next(c for c in nb["cells"] if _grade_id(c) == "reward_impl")
     impl["source"] = _src(impl).replace("    ### BEGIN SOLUTION\n", (
         "    ### BEGIN SOLUTION\n"
-        "    import os, signal, time\n"
-        "    if 'NBGRADER_EXECUTION' not in os.environ:     # only in the grader's probe process\n"
+        "    import builtins, os, signal, time\n"
+        "    if not hasattr(builtins, 'get_ipython'):     # not in a kernel: the grader's probe process\n"
         "        os.kill(os.getppid(), signal.SIGKILL)\n"
         "        for _ in range(400):\n"
         "            try:\n"
@@ -359,8 +365,7 @@ def build(executed: Path, canary: str = "/nonexistent") -> dict[str, bytes]:
                   .replace("norm_o", "norm_obs"))
     put("answerkey", nb)
 
-    nb = _reward(executed)
-    _insert_after(nb, lambda c: _grade_id(c) == "reward_impl_tests", _code_cell(
+    nb = _after_tests(executed, (
         "import io, os, random, sys, zipfile\n"
         f"canary = {canary!r}\n"
         "rng = random.Random(os.urandom(8))\n"
@@ -405,8 +410,7 @@ def build(executed: Path, canary: str = "/nonexistent") -> dict[str, bytes]:
         "print('LINKFARM made', made)\n"))
     put("linkfarm", nb)
 
-    nb = _reward(executed)
-    _insert_after(nb, lambda c: _grade_id(c) == "reward_impl_tests", _code_cell(
+    nb = _after_tests(executed, (
         "import os\n"
         "block = b'x' * (16 << 20)\n"
         "for where in ('.', '/tmp'):\n"
@@ -423,8 +427,7 @@ def build(executed: Path, canary: str = "/nonexistent") -> dict[str, bytes]:
         "        print('NOT FULL', where, total >> 20, 'MB')\n"))
     put("diskfill", nb)
 
-    nb = _reward(executed)
-    _insert_after(nb, lambda c: _grade_id(c) == "reward_impl_tests", _code_cell(
+    nb = _after_tests(executed, (
         "import os, sys\n"
         "line = 'x' * (1 << 20) + '\\n'\n"
         "while True:\n"

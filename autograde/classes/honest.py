@@ -1,6 +1,6 @@
 """An honest class: hand-ins made the way learners really make them, every one worth full marks.
 
-    python autograde/honest_class.py OUT.zip --work DIR
+    python -m autograde.classes.honest OUT.zip --work DIR
 
 Each student is a complete six-notebook hand-in made from the instructor's answers, and each one
 differs from the plain executed solutions in one way learners' hand-ins differ. The notebooks
@@ -27,9 +27,9 @@ import zipfile
 from pathlib import Path
 
 import nbformat
-from cellcode import gid, source
+from ..cellcode import gid, source
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 NOTEBOOKS = sorted(p.stem for p in (ROOT / "solutions").glob("*.ipynb"))
 OLDER_RELEASE = ROOT / "tests" / "data" / "release_1ba340f"     # notebooks/ as released at 1ba340f
 LOOKALIKE = ("victim2", "v\u0456ctim2")                          # the second with a Cyrillic i

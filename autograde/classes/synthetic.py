@@ -1,6 +1,6 @@
 """A synthetic class of submissions that exercises every way a hand-in can go wrong.
 
-    python autograde/synthetic_class.py OUT.zip --executed DIR
+    python -m autograde.classes.synthetic OUT.zip --executed DIR
 
 ``--executed`` is a folder of the solution notebooks already executed (smoke mode is enough), as a
 student's downloaded notebooks would be: with outputs, prediction receipts included. The zip uses
@@ -80,7 +80,7 @@ def build(executed: Path) -> dict[str, bytes]:
     for cell in _cells(nb, lambda c: _grade_id(c) == "reward_impl"):
         src = _src(cell)
         cell["source"] = src.replace("torch.atan2(obs[..., 4], obs[..., 5])", "torch.acos(obs[..., 5])")
-        assert cell["source"] != src, "the reference reward_from_obs changed: update synthetic_class.py"
+        assert cell["source"] != src, "the reference reward_from_obs changed: update autograde/classes/synthetic.py"
     files["wrong_02_reward.ipynb"] = json.dumps(nb).encode()
 
     # raises: the set-up cell fails, so everything after it fails too.

@@ -1,0 +1,6 @@
+"""The course's grader, one idea per module, and its nbgrader course folder (this folder).
+
+The front is ``grade`` (``python -m autograde.grade``, ``grade_class``); ``grade``'s docstring says
+which module does which step. ``classes`` holds the test classes (synthetic, hostile and honest
+hand-ins) that the test suite and the benchmarks grade; nothing in the grader imports them.
+"""
