@@ -189,6 +189,8 @@ def test_no_file_outside_a_sandbox_changes_and_the_course_holds_only_what_the_gr
     course, report, token, tmp = hostile
     assert (course / "instructor_only.txt").read_text() == f"CANARY {token}\n"
     assert "LINKFARM made" in outputs(course, "linkfarm")
+    # the kernel's sockets folder is root's before its first cell runs (sandbox.lock_sockets)
+    assert "SOCKETS LOCKED" in outputs(course, "linkfarm") and "SOCKETS WRITABLE" not in outputs(course, "linkfarm")
     for root, dirs, files in os.walk(course):
         for name in dirs + files:
             st = os.lstat(os.path.join(root, name))

@@ -407,7 +407,16 @@ def build(executed: Path, canary: str = "/nonexistent") -> dict[str, bytes]:
         "                f.write(('{\"cells\": [' + 'x' * rng.randrange(100)).encode(enc)); made += 1\n"
         "        except (OSError, ValueError):\n"
         "            pass\n"
-        "print('LINKFARM made', made)\n"))
+        "print('LINKFARM made', made)\n"
+        "# the folder of this kernel's own sockets, where the grader's ZeroMQ would reconnect\n"
+        "import json\n"
+        "from ipykernel.kernelapp import IPKernelApp\n"
+        "sockets = os.path.dirname(json.load(open(IPKernelApp.instance().connection_file))['ip'])\n"
+        "try:\n"
+        "    os.symlink('/etc/passwd', os.path.join(sockets, 'k-1-link'))\n"
+        "    print('SOCKETS WRITABLE', sockets)\n"
+        "except OSError as e:\n"
+        "    print('SOCKETS LOCKED', type(e).__name__)\n"))
     put("linkfarm", nb)
 
     nb = _after_tests(executed, (
