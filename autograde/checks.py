@@ -214,13 +214,23 @@ def reference_function(test: Test):
     return getattr(importlib.import_module(module), name)
 
 
+# The functions a test's cases hand to the function under test (``{"fn": name}`` in a spec), by the
+# test whose reference they are: the losses exercise is given the chapter's lambda-return.
+HELPERS = {"lambda_return": LAMBDA}
+
+
+def helpers() -> dict:
+    """{name: the package's implementation} of every function in ``HELPERS``, in THIS process."""
+    return {name: reference_function(t) for name, t in HELPERS.items()}
+
+
 def reference_results(test: Test, fresh: int) -> list[dict]:
     """The reference implementation's raw results on every case, computed in THIS process."""
     from pusht.grading import probe
 
     fn = reference_function(test)
-    helpers = {"lambda_return": reference_function(LAMBDA)}
-    return [probe(case.spec, fn, fresh, helpers) for case in test.cases]
+    helpers_ = helpers()
+    return [probe(case.spec, fn, fresh, helpers_) for case in test.cases]
 
 
 def probe_in_process(test: Test, fn, fresh: int = 12345) -> dict:
@@ -229,8 +239,8 @@ def probe_in_process(test: Test, fn, fresh: int = 12345) -> dict:
     for a student's code."""
     from pusht.grading import decode_results, encode_results, run_probes
 
-    helpers = {"lambda_return": reference_function(LAMBDA)}
-    setup, results = decode_results(encode_results(run_probes([c.spec for c in test.cases], fn, fresh, helpers)),
+    helpers_ = helpers()
+    setup, results = decode_results(encode_results(run_probes([c.spec for c in test.cases], fn, fresh, helpers_)),
                                     len(test.cases))
     return {"fresh": fresh, "status": "ok", "setup": setup, "results": results}
 

@@ -38,10 +38,11 @@ import select
 import subprocess
 import symtable
 import sys
+import textwrap
 import time
 from pathlib import Path
 
-from . import cellcode, sandbox, stripped
+from . import cellcode, checks, sandbox, stripped
 
 SETUP = (ast.Import, ast.ImportFrom, ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)
 PROBE_SECONDS = 120          # per test: defining the function and every case
@@ -188,9 +189,8 @@ def helpers_for(test) -> dict[str, str]:
     names = {a["fn"] for c in test.cases for a in c.spec.get("args", []) if isinstance(a, dict) and "fn" in a}
     out = {}
     for name in sorted(names):
-        import pusht.imagination as imagination
-
-        tree = ast.parse(inspect.getsource(getattr(imagination, name)))
+        source = inspect.getsource(checks.reference_function(checks.HELPERS[name]))
+        tree = ast.parse(textwrap.dedent(source))
         tree.body[0].decorator_list = []
         out[name] = ast.unparse(tree)
     return out
