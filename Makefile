@@ -9,6 +9,7 @@
 #   make lab      JupyterLab on the student notebooks (instructors: jupyter lab solutions/)
 #   make bench    speed figures -> benchmarks/wallclock.csv
 #   make meta     re-measure seeds 0-2 and the horizon sweep -> meta.yaml
+#   make claims   run notebooks 03-06 on seeds 0-5, record every claim they check -> benchmarks/claims.*
 PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
@@ -16,7 +17,7 @@ STAMP  := $(VENV)/.installed
 
 export PATH := $(abspath $(VENV))/bin:$(PATH)
 
-.PHONY: setup sandbox icu browser chapter run test bench meta release grade lab clean
+.PHONY: setup sandbox icu browser chapter run test bench meta claims release grade lab clean
 
 setup: $(STAMP)
 
@@ -99,6 +100,9 @@ bench: setup
 
 meta: setup
 	$(PY) scripts/record_meta.py
+
+claims: setup
+	$(PY) scripts/claims.py --record
 
 release: setup
 	$(PY) scripts/release.py

@@ -40,22 +40,35 @@ def at_wall(obs: np.ndarray) -> np.ndarray:
     return (np.abs(pusher) >= WALL_STOP - AT_WALL_TOL).any(axis=-1)
 
 
-def span_return(rollout, steps: int | None) -> float:
-    """Mean reward per step over the first ``steps`` steps (all of them for None), all starts."""
-    r = rollout.rewards if steps is None else rollout.rewards[:steps]
+def _rewards(rollout, part: str | None) -> np.ndarray:
+    return rollout.rewards if part is None else rollout.reward_part(part)
+
+
+def span_return(rollout, steps: int | None, part: str | None = None) -> float:
+    """Mean reward per step over the first ``steps`` steps (all of them for None), all starts;
+    with ``part`` ("position" or "yaw"), that term of the reward alone."""
+    r = _rewards(rollout, part)
+    r = r if steps is None else r[:steps]
     return float(np.nanmean(r))
 
 
-def _per_start(rollout, steps):
-    r = rollout.rewards if steps is None else rollout.rewards[:steps]
+def _per_start(rollout, steps, part=None):
+    r = _rewards(rollout, part)
+    r = r if steps is None else r[:steps]
     return np.nanmean(r, axis=0)                                           # (B,)
 
 
-def gap_split(rollouts: dict, steps: int | None) -> dict:
+def _se(x: np.ndarray) -> float:
+    return float(x.std(ddof=1) / np.sqrt(len(x))) if len(x) > 1 else float("nan")
+
+
+def gap_split(rollouts: dict, steps: int | None, part: str | None = None) -> dict:
     """Per-step return of each policy in each world over the first ``steps`` steps, and the gap's
     three terms (see the module doc). ``rollouts`` maps ``dream_<policy>`` and ``real_<policy>``
-    (``policy`` in POLICIES) to ``Rollout``."""
-    R = {(p, w): span_return(rollouts[f"{w}_{p}"], steps) for p in POLICIES for w in ("dream", "real")}
+    (``policy`` in POLICIES) to ``Rollout``. With ``part`` ("position" or "yaw") the same split of
+    that term of the reward alone: the reward is the sum of its two terms, so every quantity here
+    is the sum of its position and yaw versions."""
+    R = {(p, w): span_return(rollouts[f"{w}_{p}"], steps, part) for p in POLICIES for w in ("dream", "real")}
     out = {f"{p}_{w}": v for (p, w), v in R.items()}
     out["gap"] = R["trained", "dream"] - R["trained", "real"]
     out["drift"] = R["zero", "dream"] - R["zero", "real"]
@@ -66,14 +79,36 @@ def gap_split(rollouts: dict, steps: int | None) -> dict:
     # The noise of each term: the standard error of its mean over the starts (every term is a mean
     # of per-start differences, all on the same starts). A term smaller than twice its standard
     # error is not told apart from zero by these starts.
-    P = {(p, w): _per_start(rollouts[f"{w}_{p}"], steps) for p in POLICIES for w in ("dream", "real")}
+    P = {(p, w): _per_start(rollouts[f"{w}_{p}"], steps, part) for p in POLICIES for w in ("dream", "real")}
     per_start = {"gap": P["trained", "dream"] - P["trained", "real"],
                  "drift": P["zero", "dream"] - P["zero", "real"],
                  "motion": (P["untrained", "dream"] - P["zero", "dream"]) - (P["untrained", "real"] - P["zero", "real"]),
                  "training": (P["trained", "dream"] - P["untrained", "dream"])
                  - (P["trained", "real"] - P["untrained", "real"])}
     for key, x in per_start.items():
-        out[f"{key}_se"] = float(x.std(ddof=1) / np.sqrt(len(x))) if len(x) > 1 else float("nan")
+        out[f"{key}_se"] = _se(x)
+    return out
+
+
+def expert_signal(rollouts: dict, steps: int | None) -> dict:
+    """Can the dream recognise success? The scripted expert solves the real task; its actions are
+    replayed in the dream from the same starts (``dream_expert``). Over the first ``steps`` steps:
+
+    * ``expert_{dream,real}_return_per_step``: what each world pays the expert;
+    * ``expert_signal_{dream,real}``: the expert minus zero actions in each world, with standard
+      errors over the starts (``..._se``). A dream whose signal is clearly positive rewards the
+      pushes that solve the task over standing still: a learnable signal existed. A signal near
+      zero, or negative, means the dream cannot tell success from doing nothing;
+    * ``expert_signal_yaw_dream``/``_real`` and ``..._position_...``: the same for each term.
+    """
+    out = {}
+    for w in ("dream", "real"):
+        out[f"expert_{w}_return_per_step"] = span_return(rollouts[f"{w}_expert"], steps)
+        for part in (None, "position", "yaw"):
+            tag = f"_{part}" if part else ""
+            x = _per_start(rollouts[f"{w}_expert"], steps, part) - _per_start(rollouts[f"{w}_zero"], steps, part)
+            out[f"expert_signal{tag}_{w}"] = float(np.nanmean(x))
+            out[f"expert_signal{tag}_{w}_se"] = _se(x[~np.isnan(x)])
     return out
 
 

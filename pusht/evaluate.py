@@ -22,7 +22,7 @@ import numpy as np
 import torch
 
 from .grading import reference
-from .env import PUSHER_RADIUS, PushTEnv, distance_to_tee, obs_to_pose
+from .env import ANG_SCALE, POS_SCALE, PUSHER_RADIUS, PushTEnv, distance_to_tee, obs_to_pose
 from .reward import reward_from_obs
 
 
@@ -47,6 +47,26 @@ class Rollout:
         """(B,) block-to-target distance (m) at each episode's last step."""
         _, tee = obs_to_pose(self.obs[-1])
         return np.linalg.norm(tee[:, :2], axis=-1)
+
+    @property
+    def final_yaw_err(self) -> np.ndarray:
+        """(B,) |yaw error| of the block (degrees) at each episode's last step."""
+        _, tee = obs_to_pose(self.obs[-1])
+        return np.degrees(np.abs(tee[:, 2]))
+
+    def reward_part(self, part: str) -> np.ndarray:
+        """(T, B) one of the reward's two terms per step, masked like ``rewards``: "position"
+        (-0.5 * block distance / POS_SCALE) or "yaw" (-0.5 * |yaw error| / ANG_SCALE), read off
+        ``obs[1:]`` as ``reward_from_obs`` reads it. The two add up to ``rewards`` (to float32
+        rounding: the rewards were computed in float32)."""
+        _, tee = obs_to_pose(self.obs[1:])
+        if part == "position":
+            term = -0.5 * np.linalg.norm(tee[..., :2], axis=-1) / POS_SCALE
+        elif part == "yaw":
+            term = -0.5 * np.abs(tee[..., 2]) / ANG_SCALE
+        else:
+            raise ValueError(f"part must be 'position' or 'yaw', got {part!r}")
+        return np.where(np.isnan(self.rewards), np.nan, term)
 
 
 def policy_of(agent):
@@ -137,6 +157,54 @@ def real_rollout(wm, policy, seeds, horizon: int, mean, std) -> Rollout:
     return Rollout(obs=obs, actions=actions, rewards=r, pos_err=pos, success=success)
 
 
+def expert_rollout(seeds, horizon: int, mean, std) -> Rollout:
+    """The scripted expert (``pusht.expert``), which solves the task, in the real sim from
+    ``env.reset(seed)`` for each seed, in lockstep, acting on the TRUE observations. Scored with
+    the same ``reward_from_obs`` as every other rollout."""
+    from .expert import ScriptedExpert
+
+    envs = [PushTEnv() for _ in seeds]
+    B = len(envs)
+    expert = ScriptedExpert(batch_size=B)
+    obs = np.zeros((horizon + 1, B, 6))
+    obs[0] = [env.reset(s) for env, s in zip(envs, seeds)]
+    actions = np.zeros((horizon, B, 2))
+    alive = np.ones((horizon, B), dtype=bool)
+    success = np.zeros(B, dtype=bool)
+    live = np.ones(B, dtype=bool)
+    for t in range(horizon):
+        actions[t] = expert.act(obs[t])
+        obs[t + 1] = obs[t]
+        alive[t] = live
+        for i in np.flatnonzero(live):
+            obs[t + 1, i], _, done, info = envs[i].step(actions[t, i])
+            success[i] = info["success"]
+            live[i] = not done
+    mean_np, std_np = _to_np(mean), _to_np(std)
+    norm_next = torch.as_tensor((obs[1:] - mean_np) / std_np, dtype=torch.float32, device=mean.device)
+    with torch.inference_mode():
+        r, pos, _ = reward_from_obs(norm_next, mean, std)
+    r, pos = _to_np(r), _to_np(pos)
+    r[~alive], pos[~alive] = np.nan, np.nan
+    return Rollout(obs=obs, actions=actions, rewards=r, pos_err=pos, success=success)
+
+
+def replay_rollout(wm, real: Rollout, mean, std) -> Rollout:
+    """The dream of ``real``'s own actions, replayed open-loop from its start frames with the
+    package's :func:`dream` (steps after a real episode ended are masked as in ``real``). Used for
+    the expert: would the dream rate the pushes that solve the task as reality does?"""
+    actions = torch.as_tensor(real.actions, dtype=torch.float32, device=mean.device)
+    step = iter(range(len(actions)))
+
+    def replay(state):                     # dream() calls the policy once per step, in order
+        return actions[next(step)]
+
+    roll = dream_rollout(wm, replay, real.obs[0], len(actions), mean, std)
+    roll.rewards[np.isnan(real.rewards)] = np.nan
+    roll.pos_err[np.isnan(real.rewards)] = np.nan
+    return roll
+
+
 def pusher_gap(rollout: Rollout) -> np.ndarray:
     """(T+1, B) free space (m) between the pusher's rim and the T; about 0 means touching."""
     pusher, tee = obs_to_pose(rollout.obs)
@@ -154,9 +222,12 @@ def two_world_eval(wm, agent, init_agent, seeds, horizon: int, mean, std,
 
     Returns ``(metrics, rollouts)``: metrics is a flat dict of floats, rollouts maps
     ``"dream"``, ``"real"`` (the trained policy; also under ``"dream_trained"``/``"real_trained"``),
-    ``"dream_zero"``, ``"dream_untrained"``, ``"real_zero"`` and ``"real_untrained"`` to ``Rollout``.
-    With ``train_horizon``, the gap and its split (``analysis.gap_split``) are measured over the
-    first ``train_horizon`` steps (what the actor's gradient saw) and over all of them.
+    ``"dream_zero"``, ``"dream_untrained"``, ``"real_zero"``, ``"real_untrained"``, ``"real_expert"``
+    (the scripted expert in reality) and ``"dream_expert"`` (its actions replayed in the dream) to
+    ``Rollout``. With ``train_horizon``, the gap and its split (``analysis.gap_split``) are measured
+    over the first ``train_horizon`` steps (what the actor's gradient saw) and over all of them, in
+    total and for each of the reward's two terms (keys ``..._position_<span>``, ``..._yaw_<span>``),
+    and so is the expert control (``analysis.expert_signal``).
     """
     was_training = agent.training
     agent.eval()
@@ -170,7 +241,11 @@ def two_world_eval(wm, agent, init_agent, seeds, horizon: int, mean, std,
         # the same two controls in reality: what zero actions and the untrained actor really earn
         "real_zero": real_rollout(wm, zero_policy, seeds, horizon, mean, std),
         "real_untrained": real_rollout(wm, policy_of(init_agent), seeds, horizon, mean, std),
+        # a control for whether the dream can recognise success at all: the scripted expert, which
+        # solves the real task, in reality, and its very actions replayed in the dream
+        "real_expert": expert_rollout(seeds, horizon, mean, std),
     }
+    rollouts["dream_expert"] = replay_rollout(wm, rollouts["real_expert"], mean, std)
     rollouts["dream_trained"], rollouts["real_trained"] = rollouts["dream"], rollouts["real"]
     agent.train(was_training)
 
@@ -197,12 +272,24 @@ def two_world_eval(wm, agent, init_agent, seeds, horizon: int, mean, std,
     for name, key in (("zero_action", "dream_zero"), ("untrained_actor", "dream_untrained")):
         metrics[f"{name}_dream_return_per_step"] = float(rollouts[key].return_per_step.mean())
         metrics[f"{name}_dream_final_tee_dist"] = float(rollouts[key].final_tee_dist.mean())
+    for world in ("dream", "real"):
+        for pol in ("zero", "trained", "expert"):
+            roll = rollouts[f"{world}_{pol}"]
+            metrics[f"{pol}_{world}_final_yaw_err_deg"] = float(roll.final_yaw_err.mean())
+    metrics["expert_real_success_rate"] = float(rollouts["real_expert"].success.mean())
+    metrics["expert_dream_final_tee_dist"] = float(rollouts["dream_expert"].final_tee_dist.mean())
+    metrics["expert_real_final_tee_dist"] = float(rollouts["real_expert"].final_tee_dist.mean())
+    metrics["zero_action_real_final_tee_dist"] = float(rollouts["real_zero"].final_tee_dist.mean())
     if train_horizon is not None:
-        from .analysis import gap_split
+        from .analysis import expert_signal, gap_split
 
         for span, steps in (("train_horizon", min(train_horizon, horizon)), ("eval_horizon", None)):
-            for key, value in gap_split(rollouts, steps).items():
-                name = f"{key}_return_per_step" if key.endswith(("_dream", "_real")) else (
-                    key.replace("gap", "imagination_gap") if key.startswith("gap") else f"gap_{key}")
-                metrics[f"{name}_{span}"] = value
+            for part in (None, "position", "yaw"):
+                tag = f"_{part}" if part else ""
+                for key, value in gap_split(rollouts, steps, part).items():
+                    name = f"{key}_return_per_step" if key.endswith(("_dream", "_real")) else (
+                        key.replace("gap", "imagination_gap") if key.startswith("gap") else f"gap_{key}")
+                    metrics[f"{name}{tag}_{span}"] = value
+            for key, value in expert_signal(rollouts, steps).items():
+                metrics[f"{key}_{span}"] = value
     return metrics, rollouts

@@ -322,8 +322,11 @@ def clean_saved_notebook(path: Path) -> int:
 
 # ------------------------------------------------------------------------------ running ----
 
-def execute(nb: Path, out: Path, smoke: bool, on_cell_executed=None) -> None:
-    """Run one instructor notebook headless into ``out`` with papermill, parameters SMOKE and OUT.
+def execute(nb: Path, out: Path, smoke: bool, on_cell_executed=None, parameters: dict | None = None,
+            saved: Path | None = None) -> None:
+    """Run one instructor notebook headless into ``out`` with papermill, parameters SMOKE and OUT
+    (and any other ``parameters``, e.g. SEED), saving the executed copy as ``saved`` (default
+    ``out / nb.name``).
 
     Raises ``papermill.PapermillExecutionError`` naming the failing cell. On Linux and macOS the
     kernel talks to papermill over Unix sockets in a private temporary folder instead of TCP ports
@@ -340,8 +343,9 @@ def execute(nb: Path, out: Path, smoke: bool, on_cell_executed=None) -> None:
             config.KernelManager.transport = "ipc"
             config.KernelManager.ip = os.path.join(sockets, "k")
         hooks = {"on_cell_executed": on_cell_executed} if on_cell_executed else {}
-        pm.execute_notebook(str(nb), str(out / nb.name), kernel_name="python3", cwd=str(out),
-                            parameters={"SMOKE": smoke, "OUT": str(out)}, progress_bar=False,
+        pm.execute_notebook(str(nb), str(saved or out / nb.name), kernel_name="python3", cwd=str(out),
+                            parameters={"SMOKE": smoke, "OUT": str(out), **(parameters or {})},
+                            progress_bar=False,
                             config=config, **hooks)
 
 

@@ -52,7 +52,7 @@ import numpy as np
 from ..env import ARENA_HALF, CONTROL_DT, OBS_NAMES, SUCCESS_POS
 from ..selfcheck import Question
 from .gap import NEAR
-from .horizon import LEVEL, Test, t_quantile
+from .stats import LEVEL, Test, t_quantile
 from . import figure
 
 # 1 mm: the resolution at which the model's errors are read as changed. Physically: a thirtieth of
@@ -100,8 +100,8 @@ class Change(Test):
     threshold ``k`` and the ``outcome`` "up", "down" or "same", within k standard errors) plus the
     two values themselves, ``first`` and ``last``."""
 
-    first: float
-    last: float
+    first: float = math.nan
+    last: float = math.nan
 
     @property
     def shrank(self) -> bool:

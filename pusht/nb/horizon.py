@@ -17,14 +17,13 @@ regroup them as ``{horizon: [value per actor seed]}``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from ..selfcheck import Question
 from . import figure
+from .stats import LEVEL, Test, sign_test, t_quantile, welch  # noqa: F401 (t_quantile: re-exported)
 
-LEVEL = 0.95                 # two-sided confidence of every test here (see the module doc)
 DT = 0.1                     # s per control step
 HORIZON_COLORS = ["tab:cyan", "tab:blue", "tab:purple", "tab:red", "tab:brown"]
 WORLD_COLORS = {"dream": "tab:purple", "real": "tab:orange"}
@@ -46,95 +45,15 @@ EX2_OPTIONS = {
 VERDICT_LETTER = {"up": "a", "down": "b", "same": "c"}
 
 
-# --- statistics ---------------------------------------------------------------------------------
-def _t_cdf(x: float, df: float, n: int = 4001) -> float:
-    """P(T <= x) for Student's t with ``df`` degrees of freedom (x >= 0), by the trapezoid rule."""
-    grid = np.linspace(0.0, x, n)
-    log_c = math.lgamma((df + 1) / 2) - math.lgamma(df / 2) - 0.5 * math.log(df * math.pi)
-    pdf = np.exp(log_c) * (1 + grid ** 2 / df) ** (-(df + 1) / 2)
-    return 0.5 + float((pdf[1:] + pdf[:-1]).sum() * (grid[1] - grid[0]) / 2)
-
-
-def t_quantile(df: float, level: float = LEVEL) -> float:
-    """The two-sided ``level`` point of Student's t: |T| exceeds it with probability 1 - level.
-
-    Computed by bisection on the t distribution's CDF (no scipy needed); ``df`` may be fractional
-    (Welch's degrees of freedom are). df = 2 gives 4.30, df = 4 gives 2.78, df -> inf gives 1.96.
-    """
-    if not df > 0:
-        raise ValueError(f"degrees of freedom must be positive, got {df}")
-    target = 0.5 + level / 2
-    lo, hi = 0.0, 1.0
-    while _t_cdf(hi, df) < target:
-        hi *= 2
-    for _ in range(60):
-        mid = (lo + hi) / 2
-        lo, hi = (mid, hi) if _t_cdf(mid, df) < target else (lo, mid)
-    return (lo + hi) / 2
-
-
-@dataclass(frozen=True)
-class Test:
-    """One comparison: ``diff`` (the mean, or the difference of two means), its standard error
-    ``se`` from the across-seed spread, the degrees of freedom and the threshold ``k`` (in
-    standard errors), and the outcome: "up", "down" or "same" (within the spread)."""
-
-    diff: float
-    se: float
-    df: float
-    k: float
-    outcome: str
-
-    @property
-    def ratio(self) -> float:
-        """|diff| in standard errors (inf when the seeds agree exactly and diff is not 0)."""
-        return abs(self.diff) / self.se if self.se > 0 else (math.inf if self.diff else 0.0)
-
-
-def _outcome(diff: float, se: float, k: float) -> str:
-    if abs(diff) > k * se and diff != 0:
-        return "up" if diff > 0 else "down"
-    return "same"
-
-
-def _values(x) -> np.ndarray:
-    v = np.asarray(list(x), dtype=float)
-    if v.size < 2:
-        raise ValueError(f"need at least two actor seeds to measure a spread, got {v.size}")
-    return v
-
-
-def sign_test(values, level: float = LEVEL) -> Test:
-    """Is the mean of ``values`` (one per actor seed) above, below or not told apart from zero?
-
-    One-sample t: standard error s / sqrt(n) with s the across-seed standard deviation, n - 1
-    degrees of freedom.
-    """
-    v = _values(values)
-    se = float(v.std(ddof=1) / np.sqrt(v.size))
-    df = v.size - 1.0
-    k = t_quantile(df, level)
-    return Test(float(v.mean()), se, df, k, _outcome(float(v.mean()), se, k))
-
-
-def gap_change(short, long, level: float = LEVEL) -> Test:
+# --- statistics (pusht/nb/stats.py) -----------------------------------------------------------
+def gap_change(short, long, level: float = LEVEL, min_effect: float = 0.0) -> Test:
     """Did a quantity change from one horizon to another, beyond the spread across actor seeds?
 
-    ``short`` and ``long``: its value for each actor seed at the two horizons. Welch's t-test:
-    the difference of the means against sqrt(s1^2/n1 + s2^2/n2), with Welch-Satterthwaite degrees
-    of freedom, so the two horizons may have different spreads and numbers of seeds. The outcome
-    is "up" (``long`` is larger), "down" or "same" (within what the spread allows).
+    ``short`` and ``long``: its value for each actor seed at the two horizons; Welch's t-test
+    (:func:`pusht.nb.stats.welch`). The outcome is "up" (``long`` is larger), "down" or "same"
+    (within what the spread allows, or smaller than ``min_effect``).
     """
-    a, b = _values(short), _values(long)
-    v1, v2 = a.var(ddof=1) / a.size, b.var(ddof=1) / b.size
-    se = float(np.sqrt(v1 + v2))
-    if v1 + v2 > 0:
-        df = float((v1 + v2) ** 2 / (v1 ** 2 / (a.size - 1) + v2 ** 2 / (b.size - 1)))
-    else:
-        df = float(a.size + b.size - 2)
-    k = t_quantile(df, level)
-    diff = float(b.mean() - a.mean())
-    return Test(diff, se, df, k, _outcome(diff, se, k))
+    return welch(short, long, level, min_effect)
 
 
 def by_horizon(runs: dict, key: str) -> dict[int, list[float]]:

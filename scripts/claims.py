@@ -1,0 +1,148 @@
+"""``make claims``: run notebooks 03-06 on seeds 0-5 and record every claim they evaluated.
+
+    python scripts/claims.py [--seeds 0 1 2 3 4 5] [--out runs/claims] [--smoke] [--record]
+
+Each notebook runs headless (papermill, as ``make chapter`` runs it) with ``SEED`` set, all seeds
+sharing one model cache under ``--out``; notebook 04 compares its ``SEED`` with the two seeds after
+it, notebook 05 sweeps its actor seeds on the world model of ``SEED``. Every claim a notebook
+evaluates (``pusht.nb.claims``) is appended to a log per notebook and seed, through the environment
+variable ``PUSHT_CLAIMS_LOG`` that the kernel inherits. At the end the logs become one table:
+
+* ``<out>/claims.json``: every evaluation, with the numbers its predicate read;
+* ``<out>/claims.md``: claim x seed, each cell "true", "FALSE" (a fixed claim that failed) or
+  "alt" (a guarded claim that took its alternative), with counts where a notebook evaluates a claim
+  more than once;
+
+and with ``--record`` both are copied to ``benchmarks/`` with the host, the commit and the time,
+where ``tests/test_claims.py`` checks them against the registry.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import time
+from datetime import datetime, timezone
+from pathlib import Path
+
+from chapter import ROOT, execute
+
+from pusht.nb.claims import LOG_ENV, load_all
+
+NOTEBOOKS = ("03_imagination_actor", "04_imagination_gap", "05_horizon", "06_closing_the_gap")
+
+
+def host() -> str:
+    cpu = ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    import torch
+
+    return (f"{platform.machine()} {cpu or platform.processor()}, {os.cpu_count()} cores, "
+            f"python {platform.python_version()}, torch {torch.__version__}")
+
+
+def commit() -> str:
+    try:
+        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
+                              text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def collect(logs: Path) -> list[dict]:
+    rows = []
+    for path in sorted(logs.glob("*.jsonl")):
+        nb, seed = path.stem.rsplit("_seed", 1)
+        for line in path.read_text().splitlines():
+            rec = json.loads(line)
+            rows.append({"notebook": nb, "seed": int(seed), **rec})
+    return rows
+
+
+def matrix(rows: list[dict], seeds: list[int]) -> str:
+    registry = load_all()
+    names = sorted({r["claim"] for r in rows} | set(registry))
+    lines = ["| claim | kind | " + " | ".join(f"seed {s}" for s in seeds) + " |",
+             "|---|---|" + "---|" * len(seeds)]
+    for name in names:
+        fixed = registry[name].fixed if name in registry else None
+        cells = []
+        for s in seeds:
+            got = [r["holds"] for r in rows if r["claim"] == name and r["seed"] == s]
+            if not got:
+                cells.append("-")
+                continue
+            bad = "FALSE" if fixed else "alt"
+            n_true = sum(got)
+            cells.append("true" if n_true == len(got) else (bad if n_true == 0 else f"{n_true}/{len(got)} true"))
+        kind = "fixed" if fixed else ("guarded" if fixed is False else "unregistered")
+        lines.append(f"| `{name}` | {kind} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4, 5])
+    p.add_argument("--out", type=Path, default=ROOT / "runs" / "claims")
+    p.add_argument("--smoke", action="store_true", help="the tiny config (a check of the machinery)")
+    p.add_argument("--record", action="store_true", help="copy the table to benchmarks/")
+    p.add_argument("--notebooks", nargs="+", default=list(NOTEBOOKS))
+    args = p.parse_args(argv)
+    out = args.out.resolve()
+    logs, executed = out / "logs", out / "executed"
+    for d in (logs, executed):
+        d.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    seconds = {}
+    for seed in args.seeds:
+        for name in args.notebooks:
+            log = logs / f"{name}_seed{seed}.jsonl"
+            log.unlink(missing_ok=True)
+            os.environ[LOG_ENV] = str(log)
+            t = time.perf_counter()
+            print(f"seed {seed}: {name} ...", flush=True)
+            execute(ROOT / "solutions" / f"{name}.ipynb", out, args.smoke, parameters={"SEED": seed},
+                    saved=executed / f"{name}_seed{seed}.ipynb")
+            seconds[f"{name}_seed{seed}"] = round(time.perf_counter() - t, 1)
+            print(f"  {seconds[f'{name}_seed{seed}']:.0f} s", flush=True)
+    os.environ.pop(LOG_ENV, None)
+    rows = collect(logs)
+    table = {"written_by": "scripts/claims.py (make claims)", "host": host(), "commit": commit(),
+             "measured_at": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+             "config": "smoke" if args.smoke else "default", "seeds": args.seeds,
+             "notebooks": args.notebooks, "seconds": seconds,
+             "total_seconds": round(time.perf_counter() - t0, 1), "records": rows}
+    (out / "claims.json").write_text(json.dumps(table, indent=1) + "\n")
+    md = (f"# Claims x seeds\n\nWritten by `make claims` (scripts/claims.py), {table['measured_at']}, commit "
+          f"{table['commit']}, on {table['host']}; {table['config']} config, notebooks "
+          f"{', '.join(args.notebooks)}, {table['total_seconds']:.0f} s in all.\n\n"
+          "`true`: held on every evaluation for that seed. `alt`: a guarded claim that did not hold, so "
+          "the notebook printed its alternative. `FALSE`: a fixed claim that did not hold (CI fails on "
+          "it). `k/n true`: evaluated n times for that seed (per seed compared, horizon, round or fix), "
+          "held k times. `-`: not evaluated for that seed.\n\n" + matrix(rows, args.seeds) + "\n")
+    (out / "claims.md").write_text(md)
+    print(md)
+    if args.record:
+        for f in ("claims.json", "claims.md"):
+            shutil.copy(out / f, ROOT / "benchmarks" / f)
+        print("recorded in benchmarks/claims.json and benchmarks/claims.md")
+    bad = [r for r in rows if r["fixed"] and not r["holds"]]
+    if bad:
+        print(f"{len(bad)} fixed claim evaluation(s) FALSE: "
+              + ", ".join(sorted({f"{r['claim']} (seed {r['seed']})" for r in bad})), file=sys.stderr)
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
