@@ -9,6 +9,8 @@
 #   make lab      JupyterLab on the student notebooks (instructors: jupyter lab solutions/)
 #   make bench    speed figures -> benchmarks/wallclock.csv
 #   make meta     re-measure seeds 0-2 and the horizon sweep -> meta.yaml
+#   make times    make chapter, and record each notebook's measured time -> pusht/nb/times.json
+#   make pair     sync solutions/*.ipynb with their text twins text/solutions/*.py (jupytext)
 #   make claims   run notebooks 03-06 on seeds 0-5, record every claim they check -> benchmarks/claims.*
 PYTHON ?= python3
 VENV   := .venv
@@ -17,7 +19,7 @@ STAMP  := $(VENV)/.installed
 
 export PATH := $(abspath $(VENV))/bin:$(PATH)
 
-.PHONY: setup sandbox icu browser chapter run test bench meta claims release grade lab clean
+.PHONY: setup sandbox icu browser chapter run test bench meta claims pair times release grade lab clean
 
 setup: $(STAMP)
 
@@ -89,6 +91,9 @@ $(STAMP): requirements.txt pyproject.toml
 chapter: setup
 	$(PY) scripts/chapter.py --out runs/chapter
 
+times: setup
+	$(PY) scripts/chapter.py --out runs/chapter --record-times
+
 run: setup
 	$(PY) -m pusht.dreamer --seed 0 --out runs/seed0
 
@@ -100,6 +105,9 @@ bench: setup
 
 meta: setup
 	$(PY) scripts/record_meta.py
+
+pair: setup
+	$(VENV)/bin/jupytext --sync solutions/*.ipynb
 
 claims: setup
 	$(PY) scripts/claims.py --record

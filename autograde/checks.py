@@ -127,7 +127,8 @@ LOSSES = Test("losses_impl_tests", "03_imagination_actor", "actor_critic_losses"
          "in which the critic never reaches the actor)"),
     Case({"kind": "grad", "of": 1, "args": _losses_args(44, 5, 4, 6, 8, 0.9, 0.8, 0.01, grad=("states",))},
          "the critic loss must send no gradient into the imagined states (read them detached): "
-         "otherwise training the critic would move the actor"),
+         "the exercise's contract, so that the critic loss stays off the actor's road however the "
+         "two losses are stepped (with one summed backward() it would move the actor)"),
     Case({"kind": "grad", "of": 1, "args": _losses_args(45, 5, 4, 6, 8, 0.9, 0.8, 0.01, grad=("rewards",))},
          "the critic's target must be detached: no gradient from the critic loss into the rewards"),
     Case({"kind": "grad", "of": 1, "module_grads": ["critic"], "args": _losses_args(46, 5, 4, 6, 8, 0.9, 0.8, 0.01)},

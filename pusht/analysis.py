@@ -77,8 +77,8 @@ def gap_split(rollouts: dict, steps: int | None, part: str | None = None) -> dic
     out["training"] = ((R["trained", "dream"] - R["untrained", "dream"])
                        - (R["trained", "real"] - R["untrained", "real"]))
     # The noise of each term: the standard error of its mean over the starts (every term is a mean
-    # of per-start differences, all on the same starts). A term smaller than twice its standard
-    # error is not told apart from zero by these starts.
+    # of per-start differences, all on the same starts). Whether a term is told apart from zero,
+    # and whether it is large enough to matter, the notebooks decide (pusht/nb/stats.py).
     P = {(p, w): _per_start(rollouts[f"{w}_{p}"], steps, part) for p in POLICIES for w in ("dream", "real")}
     per_start = {"gap": P["trained", "dream"] - P["trained", "real"],
                  "drift": P["zero", "dream"] - P["zero", "real"],

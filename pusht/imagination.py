@@ -98,7 +98,10 @@ def actor_critic_losses(agent, states, rewards, entropy, gamma: float, lam: floa
       on the critic's values of the imagined states *with their gradient*: the actor learns from
       the critic's slope as well as from the rewards.
     * critic: regress V(state) for states 0..H-1 on the return, with the states and the target
-      both detached: the critic must not move the actor, nor chase a target that moves with it.
+      both detached. The target's detach is essential: the critic must not chase a target that
+      moves with it. The states' detach keeps the critic loss off the actor's road: with
+      :func:`set_gradients`, which hands each loss's gradient to its own network, it changes no
+      gradient (notebook 03 measures it); with one summed ``backward()`` it would move the actor.
     """
     values = agent.value(states)                                        # (H+1, B), gradient kept
     returns = return_fn(rewards, values, gamma, lam)                    # (H, B)

@@ -259,10 +259,12 @@ def save_loop(result: LoopResult, out: Path) -> None:
 
 
 def round_line(m: dict) -> str:
-    """One round in one line, as the CLI prints it."""
-    return (f"round {m['round']}: gap {m['imagination_gap']:+.3f} (training horizon "
-            f"{m['imagination_gap_train_horizon']:+.3f}), dream {m['imagined_return_per_step']:+.3f}, real "
-            f"{m['real_return_per_step']:+.3f}, success {m['real_success_rate']:.0%}, touching "
+    """One round in one line, as the CLI prints it. Its rewards are pooled over every step the
+    episodes lasted (``..._eval_horizon``), as notebook 06's table reads them; they differ from the
+    per-episode means (``imagination_gap``) only where an episode ended early on a success."""
+    return (f"round {m['round']}: gap {m['imagination_gap_eval_horizon']:+.3f} (training horizon "
+            f"{m['imagination_gap_train_horizon']:+.3f}), dream {m['trained_dream_return_per_step_eval_horizon']:+.3f}, "
+            f"real {m['trained_real_return_per_step_eval_horizon']:+.3f}, success {m['real_success_rate']:.0%}, touching "
             f"{m['real_episodes_touching_block']}/{m['eval_episodes']}, block moved "
             f"{m['real_block_displacement']:.3f} m; model on the policy's data, open-loop block "
             f"{m['wm_policy_open_loop_block_err']:.3f} m (copy-last {m['wm_policy_open_loop_block_copy_err']:.3f} m)")

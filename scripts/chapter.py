@@ -392,13 +392,44 @@ def write_memory(out: Path, records: dict, smoke: bool) -> Path:
     return path
 
 
+def record_times(out: Path) -> Path:
+    """pusht/nb/times.json from the executed notebooks in ``out`` (see pusht/nb/timing.py)."""
+    import platform
+    import subprocess
+    from datetime import datetime, timezone
+
+    import nbformat
+
+    from pusht.nb import timing
+
+    cpu = next((line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
+                if line.startswith("model name")), platform.processor()) if Path("/proc/cpuinfo").exists() \
+        else platform.processor()
+    try:
+        rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True,
+                             check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        rev = "unknown"
+    data = {"written_by": "scripts/chapter.py --record-times (make times)",
+            "host": f"{cpu}, {os.cpu_count()} cores", "measured_at":
+            datetime.now(timezone.utc).isoformat(timespec="seconds"), "commit": rev, "config": "default",
+            "notebooks": {nb.stem: timing.measure(nbformat.read(nb, as_version=4))
+                          for nb in sorted(out.glob("0*.ipynb"))}}
+    timing.TIMES.write_text(json.dumps(data, indent=1) + "\n")
+    return timing.TIMES
+
+
 def main(argv=None) -> int:
     import papermill as pm
 
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--out", type=Path, default=ROOT / "runs" / "chapter")
     p.add_argument("--smoke", action="store_true", help="the tiny config (seconds per notebook)")
+    p.add_argument("--record-times", action="store_true",
+                   help="write each notebook's measured time to pusht/nb/times.json (the default config only)")
     args = p.parse_args(argv)
+    if args.record_times and args.smoke:
+        p.error("--record-times records the default config's times; drop --smoke")
     out = args.out.resolve()
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
@@ -424,6 +455,8 @@ def main(argv=None) -> int:
         peak = f", kernel peak {r['peak_rss_mb']:.0f} MB" if r.get("measured") else ""
         print(f"  done in {r['seconds']:.0f} s{peak} -> {out / nb.name}", flush=True)
     print(f"\nall notebooks ran in {time.perf_counter() - t0:.0f} s; figures in {out / 'figures'}\n")
+    if args.record_times:
+        print(f"notebook times recorded in {record_times(out)}")
     if list((out / "metrics").glob("seed*.json")):
         print("The same policy, two worlds (30 held-out starts per seed unless --smoke):")
         print(headline_table(out / "metrics"))

@@ -1,5 +1,6 @@
 """Notebook 04's support module: every figure draws with labelled axes, every conclusion follows
-the numbers it is given (and flips when they do), every self-check is well formed."""
+the numbers it is given (and flips when they do: both branches of every claim), every self-check
+is well formed."""
 
 import matplotlib
 
@@ -11,8 +12,9 @@ import pytest  # noqa: E402
 from pusht.analysis import at_wall, expert_replay_error, replay_error  # noqa: E402
 from pusht.config import make_config  # noqa: E402
 from pusht.dreamer import run  # noqa: E402
-from pusht.evaluate import TOUCH_TOL  # noqa: E402
-from pusht.nb import gap  # noqa: E402
+from pusht.evaluate import TOUCH_TOL, Rollout  # noqa: E402
+from pusht.nb import claims, gap  # noqa: E402
+from pusht.nb.stats import MIN_REWARD_EFFECT  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -23,59 +25,259 @@ def smoke():
 def labelled(fig):
     axes = [ax for ax in fig.axes if ax.get_visible() and ax.axison]
     assert axes and all(ax.get_xlabel() or ax.get_xticklabels() for ax in axes)
-    assert all(ax.get_ylabel() for ax in axes), [ax.get_title() for ax in axes if not ax.get_ylabel()]
+    assert all(ax.get_ylabel() or ax.get_shared_y_axes().get_siblings(ax) != [ax] for ax in axes), \
+        [ax.get_title() for ax in axes if not ax.get_ylabel()]
+
+
+def no_legend_inside_an_axes_covers_data(fig):
+    """Legends sit outside the axes (figure legends, or anchored below an axes)."""
+    for ax in fig.axes:
+        leg = ax.get_legend()
+        if leg is not None and leg.get_bbox_to_anchor() is not None:
+            box = leg.get_window_extent(fig.canvas.get_renderer())
+            inside = ax.get_window_extent(fig.canvas.get_renderer())
+            assert box.y1 <= inside.y0 + 1 or box.x0 >= inside.x1 - 1 or ax.get_title().startswith("Where the blocks"), \
+                ax.get_title()
 
 
 def test_every_figure_draws_from_a_real_run(smoke):
     cfg, m, r = smoke.cfg, smoke.metrics, smoke.rollouts
     T = smoke.data.torch()
+    steps = {"train_horizon": cfg.imag_horizon, "eval_horizon": cfg.eval_horizon}
     labelled(gap.fig_two_worlds(r["dream"], r["real"], m["imagination_gap"], 0, 2.0))
-    labelled(gap.fig_decomposition(m, {"train_horizon": cfg.imag_horizon, "eval_horizon": cfg.eval_horizon}))
-    labelled(gap.fig_block_over_time(r, cfg.imag_horizon, cfg.seq_len, 0.02))
+    labelled(gap.fig_decomposition(m, steps))
+    dist, yaw = gap.typical_pose(smoke.data.mean)
+    fig = gap.fig_block_over_time(r, cfg.imag_horizon, cfg.seq_len, dist, yaw)
+    labelled(fig)
+    assert len(fig.axes) == 2 and "yaw" in fig.axes[1].get_ylabel() and "degrees" in fig.axes[1].get_ylabel()
+    labelled(gap.fig_expert_control(m, steps))
     rep = replay_error(smoke.wm, r["real"], T["mean"], T["std"])
     exp = expert_replay_error(smoke.wm, smoke.data.val_obs, smoke.data.val_act, T["mean"], T["std"])
     assert rep["pusher"].shape == (cfg.eval_horizon, cfg.eval_episodes) and (rep["block"] >= 0).all()
-    labelled(gap.fig_distribution_shift(r["real"], r["dream"], at_wall(r["real"].obs[1:]), 0.0, rep, exp,
-                                        cfg.seq_len))
+    fig = gap.fig_distribution_shift(r["real"], r["dream"], at_wall(r["real"].obs[1:]), 0.0, rep, exp, cfg.seq_len)
+    labelled(fig)
+    assert "minus" not in fig.axes[1].get_ylabel()
+    fig.canvas.draw()
+    no_legend_inside_an_axes_covers_data(fig)
     labelled(gap.fig_pusher_paths(r["real"], TOUCH_TOL, 2.0, 0, n=4))
     assert 0 <= gap.median_start(r["dream"], r["real"]) < cfg.eval_episodes
 
 
 def test_the_sentences_read_the_run_they_are_given(smoke):
-    m = smoke.metrics
+    m, r, cfg = smoke.metrics, smoke.rollouts, smoke.cfg
+    steps = {"train_horizon": cfg.imag_horizon, "eval_horizon": cfg.eval_horizon}
     for span, n in (("train_horizon", 15), ("eval_horizon", 20)):
         s = gap.split_sentence(m, span, n)
         assert f"{m[f'imagination_gap_{span}']:+.3f}" in s and f"{m[f'gap_drift_{span}']:+.3f}" in s
+        assert f"yaw {m[f'imagination_gap_yaw_{span}']:+.3f}" in s
+        assert f"position {m[f'gap_drift_position_{span}']:+.3f}" in s
+        assert "standard error over the starts" in gap.split_sentence(m, span, n, r)
+    assert gap.half_difference_se(r, None) > 0
+    assert "seed 0" in gap.seeds_sentence({0: m}, {0: r})
     assert f"{m['real_pusher_at_wall_share']:.0%}" in gap.shift_sentence(m)
     assert "seed 0's" in gap.seeds_sentence({0: m})
-    gap.dip_sentence(smoke.rollouts, smoke.cfg.imag_horizon)
+    table = gap.seeds_table({0: m, 1: m})
+    assert table.count("\n") == 3 and f"{m['imagination_gap_yaw_eval_horizon']:+.3f}" in table
+    s = gap.dip_sentence(r, cfg.imag_horizon, smoke.data.mean)
+    assert "yaw" in s and f"{gap.typical_pose(smoke.data.mean)[0]:.3f} m" in s
+    s = gap.expert_text(m, steps)
+    assert f"{m['expert_signal_dream_train_horizon']:+.3f}" in s and f"{m['expert_real_success_rate']:.0%}" in s
+    s = gap.pusher_paths_text(m, r, cfg.eval_episodes, TOUCH_TOL)
+    assert f"{m['real_block_displacement']:.3f} m" in s
+    s = gap.headline_text(m, 0, 0, cfg.eval_episodes, {k: {"seed0": 0.1} for k in (
+        "imagined_return_per_step", "real_return_per_step", "imagination_gap", "imagined_final_tee_dist",
+        "real_final_tee_dist", "real_success_rate")})
+    assert f"{m['imagination_gap']:+.3f}" in s and "quoted" in s and "wired" not in s
+    i = gap.median_start(r["dream"], r["real"])
+    assert f"Start {i}" in gap.median_start_text(i, r["dream"], r["real"])
+    assert "seed 0" in gap.exploitation_text({0: m}, 15)
+    gap.company_text(m, 15)
 
 
-def _m(gap_, gse, drift, dse, success=0.0):
-    return {"imagination_gap": gap_, "imagination_gap_se_eval_horizon": gse, "gap_drift_eval_horizon": drift,
-            "gap_drift_se_eval_horizon": dse, "real_success_rate": success}
+# ---- synthetic metrics: each claim's both branches --------------------------------------------
+def full_metrics(gap_=0.2, drift=0.15, training=0.0, motion=0.0, se=0.01, pos_share=0.4, success=0.0,
+                 expert_dream=-0.05, expert_real=0.15):
+    m = {"imagination_gap": gap_, "real_success_rate": success, "imagined_return_per_step": -0.2,
+         "real_return_per_step": -0.2 - gap_, "expert_real_success_rate": 1.0}
+    for span in gap.SPANS:
+        for key, v in (("imagination_gap", gap_), ("gap_drift", drift), ("gap_training", training),
+                       ("gap_motion", motion)):
+            m[f"{key}_{span}"], m[f"{key}_se_{span}"] = v, se
+            m[f"{key}_position_{span}"], m[f"{key}_se_position_{span}"] = pos_share * v, se
+            m[f"{key}_yaw_{span}"], m[f"{key}_se_yaw_{span}"] = (1 - pos_share) * v, se
+        for world, v in (("dream", expert_dream), ("real", expert_real)):
+            for tag in ("", "_position", "_yaw"):
+                m[f"expert_signal{tag}_{world}_{span}"] = v if not tag else v / 2
+                m[f"expert_signal{tag}_{world}_se_{span}"] = se
+    return m
+
+
+STEPS = {"train_horizon": 15, "eval_horizon": 100}
 
 
 def test_exercise_one_verdict_covers_every_outcome():
-    assert gap.ex1_verdict([_m(0.2, 0.02, 0.2, 0.02, success=0.1), _m(0.2, 0.02, 0.2, 0.02)]) == "a"
-    assert gap.ex1_verdict([_m(0.2, 0.02, 0.15, 0.02)] * 2) == "c"        # rosy with zero actions
-    assert gap.ex1_verdict([_m(0.2, 0.02, 0.02, 0.02)] * 2) == "b"        # the actor's doing
-    assert gap.ex1_verdict([_m(0.03, 0.02, 0.0, 0.02)] * 2) == "d"        # within noise: not rosier
-    assert gap.ex1_verdict([_m(-0.2, 0.02, 0.0, 0.02)] * 2) == "d"        # the dream is gloomier
-    assert gap.ex1_verdict([_m(0.2, 0.02, 0.15, 0.02), _m(0.2, 0.02, 0.01, 0.02)]) == "b"  # mixed: on the means
+    def mm(gap_, gse, drift, dse, success=0.0):
+        return {"imagination_gap": gap_, "imagination_gap_se_eval_horizon": gse, "gap_drift_eval_horizon": drift,
+                "gap_drift_se_eval_horizon": dse, "real_success_rate": success}
+    assert gap.ex1_verdict([mm(0.2, 0.02, 0.2, 0.02, success=0.1), mm(0.2, 0.02, 0.2, 0.02)]) == "a"
+    assert gap.ex1_verdict([mm(0.2, 0.02, 0.15, 0.02)] * 2) == "c"        # rosy with zero actions
+    assert gap.ex1_verdict([mm(0.2, 0.02, 0.02, 0.02)] * 2) == "b"        # the actor's doing
+    assert gap.ex1_verdict([mm(0.03, 0.02, 0.0, 0.02)] * 2) == "d"        # within noise: not rosier
+    assert gap.ex1_verdict([mm(0.015, 0.001, 0.0, 0.001)] * 2) == "d"     # beyond noise, below the minimum effect
+    assert gap.ex1_verdict([mm(-0.2, 0.02, 0.0, 0.02)] * 2) == "d"        # the dream is gloomier
+    assert gap.ex1_verdict([mm(0.2, 0.02, 0.15, 0.02), mm(0.2, 0.02, 0.01, 0.02)]) == "b"  # mixed: on the means
+    assert gap.ex1_verdict([mm(0.2, 0.02, 0.19, 0.02), mm(0.2, 0.02, 0.05, 0.02)]) == "c"  # mixed: on the means
     assert set(gap.EX1_OPTIONS) == {"a", "b", "c", "d"}
+    assert "0.02" in gap.ex1_note()
 
 
-def test_a_term_is_only_called_positive_beyond_twice_its_noise():
+def test_a_term_is_only_called_positive_beyond_twice_its_noise_and_the_minimum_effect():
     assert gap.describe(0.05, 0.02) == "clearly positive"
     assert gap.describe(0.03, 0.02) == "not told apart from zero"
     assert gap.describe(-0.05, 0.02) == "clearly negative"
-    m = {"gap_training_train_horizon": 0.05, "gap_training_se_train_horizon": 0.01,
-         "gap_training_eval_horizon": 0.0, "gap_training_se_eval_horizon": 0.01,
-         "gap_drift_train_horizon": 0.1, "imagination_gap_train_horizon": 0.15}
-    assert "exploitation" in gap.split_story(m, 15) and "that advantage is gone" in gap.split_story(m, 15)
+    assert gap.describe(0.01, 0.001) == "beyond the noise but smaller than the minimum effect that matters"
+    assert gap.clearly_positive(0.05, 0.02) and not gap.clearly_positive(0.01, 0.001)
+    m = full_metrics(training=0.05)
+    m["gap_training_eval_horizon"] = 0.0
+    s = gap.split_story(m, 15)
+    assert "exploitation" in s and "that advantage is gone" in s and "already over the first 15" in s
+    m["gap_training_eval_horizon"] = -0.1
+    assert "that advantage is reversed" in gap.split_story(m, 15)
     m["gap_training_train_horizon"] = 0.01
-    assert "found little to exploit" in gap.split_story(m, 15)
+    assert "did not measurably exploit" in gap.split_story(m, 15)
+    m["gap_training_eval_horizon"] = 0.1
+    assert "only after the steps its gradient saw" in gap.split_story(m, 15)
+    m["gap_drift_train_horizon"] = 0.0
+    assert "not measurably rosier than reality over the" in gap.split_story(m, 15)
+
+
+def test_the_split_says_which_half_dominates():
+    assert gap.dominant_half(full_metrics(pos_share=0.2), "eval_horizon") == "yaw"
+    assert gap.dominant_half(full_metrics(pos_share=0.8), "eval_horizon") == "position"
+    assert gap.dominant_half(full_metrics(pos_share=0.5), "eval_horizon") is None
+    assert gap.dominant_half(full_metrics(gap_=-0.2, pos_share=0.3), "eval_horizon") is None
+    # a per-start standard error of the difference can decide what the conservative bound cannot
+    assert gap.dominant_half(full_metrics(pos_share=0.4), "eval_horizon") is None
+    assert gap.dominant_half(full_metrics(pos_share=0.4), "eval_horizon", se_diff=0.005) == "yaw"
+    assert "**yaw** half" in gap.split_sentence(full_metrics(pos_share=0.2), "eval_horizon", 100)
+    assert "**position** half" in gap.split_sentence(full_metrics(pos_share=0.8), "eval_horizon", 100)
+    assert "Neither half" in gap.split_sentence(full_metrics(pos_share=0.5), "eval_horizon", 100)
+    assert "of the gap)" in gap.split_sentence(full_metrics(), "eval_horizon", 100)       # shares when rosy
+    assert "of the gap)" not in gap.split_sentence(full_metrics(gap_=0.0), "eval_horizon", 100)
+
+
+def test_the_expert_control_says_whether_the_dream_recognises_success():
+    assert "less than standing still" in gap.expert_text(full_metrics(expert_dream=-0.05), STEPS)
+    assert "it can recognise success" in gap.expert_text(full_metrics(expert_dream=0.1), STEPS)
+    assert "does not tell the expert's pushes apart" in gap.expert_text(full_metrics(expert_dream=0.005), STEPS)
+    assert "reality rewards the pushes" in gap.expert_text(full_metrics(), STEPS)
+    assert "even reality does not" in gap.expert_text(full_metrics(expert_real=0.01), STEPS)
+    m = full_metrics(expert_dream=0.1)
+    m["expert_real_success_rate"] = 0.0
+    s = gap.expert_text(m, STEPS)
+    assert "fewer than half" in s and "recognise success" not in s and "solve the task" not in s
+
+
+def test_run_shows_and_company_follow_the_training_term():
+    assert "training made the dream rosier" in gap.exploitation_text({3: full_metrics(training=0.05)}, 15)
+    assert "did not measurably exploit" in gap.exploitation_text({3: full_metrics(training=0.005)}, 15)
+    assert "did exploit" in gap.company_text(full_metrics(training=0.05), 15)
+    s = gap.company_text(full_metrics(training=0.005), 15)
+    assert "not the actor's exploitation" in s and "rosy even with nobody pushing" in s
+    assert "not measurably rosier" in gap.company_text(full_metrics(training=0.005, drift=0.0), 15)
+
+
+def test_the_dream_check_and_the_seeds_sentence():
+    assert "reproduces" in gap.dream_check_text(1e-7)
+    assert "Careful" in gap.dream_check_text(0.01)
+    a, b = full_metrics(pos_share=0.2), full_metrics(gap_=0.3, drift=0.05, pos_share=0.8)
+    assert "at least half of the gap" in gap.seeds_sentence({0: a, 1: a})
+    s = gap.seeds_sentence({0: a, 1: b})
+    assert "less than half" in s and "yaw on seed 0" in s and "position on seed 1" in s
+    assert "neither" in gap.seeds_sentence({5: full_metrics(pos_share=0.5)})
+
+
+def _roll(block_xy, yaw_deg, rewards=None):
+    """A Rollout (T+1 = len(block_xy)) from per-step block positions (T+1, B, 2) and yaws (T+1, B)."""
+    block_xy, yaw = np.asarray(block_xy, float), np.radians(np.asarray(yaw_deg, float))
+    obs = np.zeros(block_xy.shape[:2] + (6,))
+    obs[..., 0] = 0.2
+    obs[..., 2:4], obs[..., 4], obs[..., 5] = block_xy, np.sin(yaw), np.cos(yaw)
+    T, B = obs.shape[0] - 1, obs.shape[1]
+    r = np.full((T, B), -0.3) if rewards is None else np.asarray(rewards, float)
+    return Rollout(obs=obs, actions=np.zeros((T, B, 2)), rewards=r, pos_err=np.zeros((T, B)),
+                   success=np.zeros(B, bool))
+
+
+def _line(start, end, T=20, B=4):
+    f = np.linspace(0, 1, T + 1)[:, None, None]
+    return np.broadcast_to(np.asarray(start, float) + f * (np.asarray(end, float) - np.asarray(start, float)),
+                           (T + 1, B, 2))
+
+
+def test_the_dip_sentence_checks_where_the_dream_drifts():
+    spawn = [0.15, 0.0]
+    mean = np.array([0.0, 0.0, 0.01, 0.0, 0.0, 1.0])          # data's typical block: 1 cm off, yaw 0
+    real = _roll(_line(spawn, spawn), np.full((21, 4), 80.0))
+    toward = _roll(_line(spawn, [0.02, 0.0]), np.linspace(80, 10, 21)[:, None].repeat(4, 1))
+    away = _roll(_line(spawn, [0.3, 0.0]), np.full((21, 4), 80.0))
+    rolls = {"dream_trained": toward, "dream_zero": toward, "real_zero": real, "real_trained": real}
+    s = gap.dip_sentence(rolls, 15, mean)
+    assert "drifts toward the data's typical pose, in position and in yaw" in s and "reads as progress" in s
+    s = gap.dip_sentence({**rolls, "dream_zero": away}, 15, mean)
+    assert "does not drift toward the data's typical pose" in s and "progress" not in s
+    half = _roll(_line(spawn, [0.02, 0.0]), np.full((21, 4), 80.0))
+    assert "but not toward its typical yaw" in gap.dip_sentence({**rolls, "dream_zero": half}, 15, mean)
+    far = np.array([0.0, 0.0, 0.14, 0.0, 0.0, 1.0])
+    assert "not near the target" in gap.dip_sentence(rolls, 15, far)
+    # the trained dream's best moment inside the training horizon, then back out; zero actions nearer
+    dip = np.concatenate([_line(spawn, [0.05, 0.0], T=10)[:-1], _line([0.05, 0.0], [0.12, 0.0], T=10)])
+    s = gap.dip_sentence({**rolls, "dream_trained": _roll(dip, np.full((21, 4), 80.0))}, 15, mean)
+    assert "drifts back out" in s and "never moves gets the dreamed block closer" in s
+    assert "drifts back out" not in gap.dip_sentence(rolls, 15, mean)
+    assert gap.typical_pose([0, 0, 0.03, 0.04, np.sin(np.radians(-30)), np.cos(np.radians(-30))]) == \
+        pytest.approx((0.05, 30.0))
+
+
+def test_pusher_paths_text_compares_with_zero_actions():
+    m = {"real_episodes_touching_block": 1, "real_pusher_min_gap": 0.1, "real_block_displacement": 0.01,
+         "real_block_displacement_max": 0.05}
+    pos = [[0.15, 0.0]] * 4
+    z = _roll(np.broadcast_to(pos, (11, 4, 2)), np.zeros((11, 4)), rewards=np.full((10, 4), -0.3))
+
+    def trained(r):
+        return _roll(np.broadcast_to(pos, (11, 4, 2)), np.zeros((11, 4)), rewards=np.asarray(r)[None].repeat(10, 0))
+    assert "no better than standing still" in gap.pusher_paths_text(
+        m, {"real_trained": trained([-0.3, -0.301, -0.299, -0.3]), "real_zero": z}, 4, TOUCH_TOL)
+    assert "clearly better" in gap.pusher_paths_text(
+        m, {"real_trained": trained([-0.2, -0.21, -0.19, -0.2]), "real_zero": z}, 4, TOUCH_TOL)
+    assert "clearly *worse*" in gap.pusher_paths_text(
+        m, {"real_trained": trained([-0.4, -0.41, -0.39, -0.4]), "real_zero": z}, 4, TOUCH_TOL)
+
+
+def test_shift_sentence_branches():
+    m = {"imag_horizon": 15, "expert_pusher_at_wall_share": 0.0, "real_pusher_at_wall_share": 0.8,
+         "replay_pusher_err_train_horizon": 0.2, "expert_replay_pusher_err_train_horizon": 0.1,
+         "replay_block_err_train_horizon": 0.2, "expert_replay_block_err_train_horizon": 0.05,
+         "dream_steps_per_train_clip": 6.25, "train_clip_steps": 16, "dream_final_block_spread": 0.04,
+         "real_final_block_spread": 0.15, "spawn_block_spread": 0.15}
+    s = gap.shift_sentence(m)
+    assert "has left the data" in s and "collapse" in s
+    m.update(replay_pusher_err_train_horizon=0.101, dream_final_block_spread=0.15)
+    s = gap.shift_sentence(m)
+    assert "about as well" in s and "about as spread" in s
+
+
+def test_every_claim_of_this_notebook_is_registered_and_keyword_only():
+    mine = {n: c for n, c in claims.REGISTRY.items() if n.startswith("04.")}
+    assert len(mine) >= 20
+    with pytest.raises(TypeError):
+        gap.training_exploits(0.1, 0.01, 2.0, MIN_REWARD_EFFECT)
+    before = len(claims.LEDGER)
+    assert gap.training_exploits(value=0.05, se=0.01, k=2.0, min_effect=MIN_REWARD_EFFECT)
+    assert not gap.training_exploits(value=0.007, se=0.009, k=2.0, min_effect=MIN_REWARD_EFFECT)
+    assert not gap.training_exploits(value=0.015, se=0.001, k=2.0, min_effect=MIN_REWARD_EFFECT)  # too small
+    assert [r["claim"] for r in claims.LEDGER[before:]] == ["04.training_exploits"] * 3
 
 
 def test_self_checks_are_well_formed():

@@ -86,15 +86,21 @@ def test_the_reconciliation_names_each_horizon_and_the_sign_flip():
     assert "From 5 to 30 steps the gap rose" in text and "changed sign" in text
     same = nb05.reconcile_text(sweep([0.20, 0.20, 0.205]), 30, 100)
     assert "did not change beyond the spread" in same and "changed sign" not in same
+    assert "Welch's t-test" in text and "k = " in text and "minimum effect that matters 0.020" in text
 
 
 def test_the_worlds_sentence_says_which_side_moved():
     real = sweep([-0.41, -0.40, -0.41])
     succ = {h: [0, 0, 0] for h in H}
     s = nb05.worlds_sentence(sweep([-0.57, -0.27, -0.20]), real, succ, 30)
-    assert "the dream's verdict moved; reality did not" in s and "0/90 at 30 steps" in s
+    assert "the dream's doing" in s and "0/90 at 30 steps" in s
     s = nb05.worlds_sentence(sweep([-0.2, -0.2, -0.2]), sweep([-0.5, -0.4, -0.3]), succ, 30)
-    assert "reality's verdict moved, not the dream's" in s
+    assert "reality's doing" in s
+    s = nb05.worlds_sentence(sweep([-0.5, -0.4, -0.3]), sweep([-0.5, -0.4, -0.3]), succ, 30)
+    assert "Both worlds' ratings moved" in s
+    # defect 7: a real move of +0.010 per step, far beyond its tiny spread, is below the minimum effect
+    s = nb05.worlds_sentence(sweep([-0.2, -0.2, -0.2]), sweep([-0.452, -0.447, -0.442], spread=0.001), succ, 30)
+    assert "Neither world's rating changed" in s and "less than the minimum effect" in s
 
 
 def test_the_terms_sentence_sees_what_the_horizon_cannot_change():
@@ -106,17 +112,33 @@ def test_the_terms_sentence_sees_what_the_horizon_cannot_change():
     assert "Negative means" in s and "worse in the very world model" in s
     assert nb05.same_at_every_horizon(terms["drift"]) and not nb05.same_at_every_horizon(terms["training"])
     c = nb05.conclusion(sweep([-0.15, 0.13, 0.21]), sweep([-0.41, -0.40, -0.41]), terms)
-    assert "Reality pays the same" in c and "The gap did move" in c and "all of that change" in c
+    assert "did not change detectably" in c and "The gap did move" in c and "all of that change" in c
     c = nb05.conclusion(sweep([0.20, 0.20, 0.205]), sweep([-0.5, -0.4, -0.3]), terms)
-    assert "Reality moved" in c and "Nor did the gap move" in c
+    assert "Reality's pay changed" in c and "Welch's t-test" in c and "not tell apart from no change" in c
+    # defect 7: -0.452 -> -0.442, far beyond its spread, is NOT "reality moved"
+    c = nb05.conclusion(sweep([0.2, 0.2, 0.2]), sweep([-0.452, -0.447, -0.442], spread=0.001), terms)
+    assert "about the same" in c and "smaller than the minimum effect" in c and "changed with" not in c
+    c = nb05.conclusion(sweep([0.20, 0.20, 0.21], spread=0.001), sweep([-0.4] * 3), terms)
+    assert "smaller than the minimum effect that matters" in c and "too little to matter" in c
 
 
 def test_the_other_sentences_read_their_numbers():
     s = nb05.own_horizon_sentence(sweep([0.045, 0.098, 0.17], spread=0.003))
-    assert "+0.045" in s and "At every horizon" in s
-    s = nb05.block_sentence(sweep([0.215, 0.104, 0.112]), sweep([0.169, 0.159, 0.171]), 0.158)
-    assert "0.215 m" in s and "After training with 5-step dreams" in s
-    assert "After training" not in nb05.block_sentence(sweep([0.1] * 3), sweep([0.16] * 3), 0.158)
+    assert "+0.045" in s and "At every horizon" in s and "above reality" in s
+    s = nb05.own_horizon_sentence(sweep([-0.045, -0.098, -0.17], spread=0.003))
+    assert "At every horizon" in s and "below reality" in s
+    s = nb05.own_horizon_sentence(sweep([0.10, -0.10, 0.0], spread=0.003))
+    assert "above reality at 5 steps" in s and "below reality at 15 steps" in s
+    s = nb05.own_horizon_sentence(sweep([0.0, 0.0, 0.0], spread=0.05))
+    assert "At no horizon" in s
+    s = nb05.block_sentence(sweep([0.215, 0.104, 0.112], spread=0.003), sweep([0.169, 0.159, 0.171], spread=0.003), 0.158)
+    assert "0.215 m" in s and "After training with 5-step dreams" in s and "In reality" not in s
+    s = nb05.block_sentence(sweep([0.1] * 3), sweep([0.2, 0.16, 0.16], spread=0.003), 0.158)
+    assert "After training" not in s and "In reality, the actors trained with 5-step dreams pushed" in s
+    s = nb05.block_sentence(sweep([0.1] * 3), sweep([0.16] * 3), 0.158)
+    assert "In neither world" in s
+    # a block 1 cm further out, however tight the spread, is below the 2 cm success tolerance
+    assert "After training" not in nb05.block_sentence(sweep([0.168] * 3, spread=0.001), sweep([0.16] * 3), 0.158)
     curve = np.array([0.15, 0.12, 0.10, 0.14, 0.2])                  # closest at step 2, 0.2 s
     assert nb05.closest_approach(curve) == (pytest.approx(0.10), pytest.approx(0.2))
     curves = {h: {"dream": np.stack([curve] * 3), "real": np.stack([curve] * 3)} for h in H}
@@ -154,3 +176,142 @@ def test_self_checks_are_well_formed():
         assert isinstance(q, Question) and q.answer in q.options and len(q.options) >= 3, name
         assert q.why and "Type one of" in render(q, "")                  # an empty answer never fails
         assert "is right" in render(q, q.answer)
+
+
+# --- issue 29: minimum effect, mechanisms, halves, generated notes ------------------------------
+def test_a_detected_change_below_the_minimum_effect_is_not_a_change():
+    short, long = [-0.453, -0.452, -0.451], [-0.443, -0.442, -0.441]        # +0.010, ~12 SE out
+    t, kind = nb05.judge_change("real_rating", short, long)
+    assert t.detected and not t.matters and kind == "small"
+    assert "less than the minimum effect" in nb05.change_phrase(t, kind)
+    assert nb05.gap_change(short, long).outcome == "same"
+    assert nb05.ex2_verdict({5: short, 30: long}) == "c"
+    assert nb05.judge_change("gap", [0.0, 0.1, 0.2], [0.3, 0.4, 0.5])[1] == "up"
+    assert nb05.judge_change("gap", [0.3, 0.4, 0.5], [0.0, 0.1, 0.2])[1] == "down"
+    assert nb05.judge_change("gap", [0.0, 0.3, 0.6], [0.1, 0.4, 0.7])[1] == "same"
+    assert nb05.judge_sign("training", [0.010, 0.011, 0.012])[1] == "small"
+    assert nb05.judge_sign("training", [-0.3, -0.31, -0.32])[1] == "down"
+    assert nb05.judge_sign("training", [0.3, 0.31, 0.32])[1] == "up"
+    assert nb05.judge_sign("training", [-0.1, 0.0, 0.1])[1] == "same"
+    assert "3.4" not in nb05.EX2_OPTIONS["c"] and "minimum effect" in nb05.EX2_OPTIONS["c"]
+    assert "0.020" in nb05.EX2_RULE and "Welch" in nb05.EX2_RULE
+
+
+def test_every_verdict_says_its_test_t_and_k():
+    t, kind = nb05.judge_change("gap", [0.1, 0.11, 0.12], [0.3, 0.31, 0.32])
+    phrase = nb05.change_phrase(t, kind)
+    assert "Welch's t-test" in phrase and "|t| = " in phrase and "k = " in phrase and "0.020" in phrase
+    line = nb05.horizon_line(5, [-0.10, -0.104, -0.108], "training", "training")
+    assert "|t| = " in line and "k = 4.30" in line
+    assert "k = 4.30" in nb05.rule_text(3) and "2 degrees of freedom" in nb05.rule_text(3)
+    assert "k = 2.78" in nb05.rule_text(5)
+    assert "k = 4.30" in nb05.interval_note(3) and "k = 12.71" in nb05.interval_note(2)
+    assert "one actor seed" in nb05.interval_note(1)
+
+
+def gains(training):
+    """Dream and real gains that make up a training term (training = dream - real)."""
+    return ({h: [v - 0.01 for v in vals] for h, vals in training.items()},
+            {h: [-0.01] * len(vals) for h, vals in training.items()})
+
+
+def test_the_mechanism_is_read_off_the_training_term():
+    # seed 0's pattern: short-horizon actors penalised in the long dream, the long ones not exploiting
+    training = sweep([-0.39, -0.10, -0.012], spread=0.01)
+    own = sweep([0.0, 0.0, 0.0], spread=0.004)
+    s = nb05.mechanism_text(training, *gains(training), own)
+    assert "penalised the short-horizon actors" in s and "never reached" in s
+    assert "not because the 30-step actors" in s and "exploitation grew" not in s
+    assert "check your one-sentence reason" in s
+    # the penalty already inside the training span: no claim about the steps beyond it
+    s = nb05.mechanism_text(training, *gains(training), sweep([-0.3, -0.1, 0.0], spread=0.004))
+    assert "penalised the short-horizon actors" in s and "never reached" not in s
+    # the exploitation story, measured
+    training = sweep([0.0, 0.05, 0.15], spread=0.005)
+    s = nb05.mechanism_text(training, *gains(training))
+    assert "exploitation grew with the horizon" in s and "penalised" not in s
+    # both at once
+    training = sweep([-0.2, 0.0, 0.15], spread=0.005)
+    s = nb05.mechanism_text(training, *gains(training))
+    assert "exploitation grew" in s and "penalised the short-horizon" in s and "not because" not in s
+    # falling: short-horizon exploitation taken back, long-horizon penalty
+    training = sweep([0.2, 0.1, 0.0], spread=0.005)
+    assert "exploit the dream less" in nb05.mechanism_text(training, *gains(training))
+    training = sweep([0.0, -0.1, -0.2], spread=0.005)
+    assert "penalised the long-horizon actors" in nb05.mechanism_text(training, *gains(training))
+    # a rise with neither end clearly non-zero; a small change; no change told apart
+    training = sweep([-0.015, 0.0, 0.015], spread=0.001)
+    assert "no single mechanism" in nb05.mechanism_text(training, *gains(training))
+    training = sweep([0.10, 0.10, 0.11], spread=0.001)
+    assert "less than the minimum effect" in nb05.mechanism_text(training, *gains(training))
+    training = sweep([-0.1, 0.0, 0.0], spread=0.2)
+    assert "not told apart from seed luck" in nb05.mechanism_text(training, *gains(training))
+
+
+def test_the_halves_sentence_says_which_half_dominates():
+    drift_p, drift_y = {h: [0.09] * 3 for h in H}, {h: [0.14] * 3 for h in H}
+    s = nb05.halves_sentence(sweep([0.07, 0.05, 0.06]), sweep([0.11, 0.15, 0.16]), drift_p, drift_y, (37.0, 87.0))
+    assert "+0.073" not in s and "+0.070 position" in s and "+0.110" in s
+    assert "At every horizon the yaw half is the larger" in s and "ends nearer the target angle" in s
+    assert "+0.090 position and +0.140 yaw" in s
+    s = nb05.halves_sentence(sweep([0.2, 0.2, 0.2]), sweep([0.01, 0.02, 0.0]), drift_p, drift_y, (87.0, 37.0))
+    assert "the position half is the larger" in s and "ends further from the target angle" in s
+    s = nb05.halves_sentence(sweep([0.2, 0.05, 0.1]), sweep([0.01, 0.2, 0.1]), drift_p, drift_y, (40.0, 45.0))
+    assert "depends on the horizon" in s and "yaw half is the larger at 15" in s and "position half at 5" in s
+    assert "neither half is clearly the larger" in s and "within the 10° success tolerance" in s
+    s = nb05.halves_sentence(sweep([0.1] * 3, spread=0.1), sweep([0.1] * 3, spread=0.1), drift_p, drift_y)
+    assert "At no horizon is either half" in s and "°" not in s
+
+
+def test_the_drift_and_motion_claims_see_a_changing_term():
+    terms = {"drift": sweep([0.22, 0.23, 0.24]), "motion": sweep([0.0, 0.01, 0.02]),
+             "training": sweep([-0.39, -0.10, -0.02])}
+    s = nb05.terms_sentence(terms, sweep([-0.57, -0.27, -0.20]), sweep([-0.57, -0.27, -0.20]))
+    assert "ranges from" in s and "same at every horizon" not in s
+    assert "did not change the policy's rating" in s
+    s = nb05.terms_sentence({**terms, "training": sweep([0.3, 0.2, 0.1])}, sweep([-0.1] * 3), sweep([-0.3] * 3))
+    assert "Positive means" in s and "training paid off" in s
+    c = nb05.conclusion(sweep([-0.15, 0.13, 0.21]), sweep([-0.41, -0.40, -0.41]), terms)
+    assert "The gap did move" in c and "all of that change" not in c
+
+
+def test_the_takeaway_reads_the_spread_across_seeds():
+    assert "0.200 per step between actor seeds" in nb05.takeaway(sweep([0.1, 0.1, 0.1], spread=0.1))
+    s = nb05.takeaway(sweep([0.1, 0.1, 0.1], spread=0.001))
+    assert "agreed within 0.002" in s and "seed luck alone" not in s
+    assert "single seed" in nb05.takeaway({5: [0.1], 30: [0.2]})
+
+
+def test_the_sweep_table_shows_both_halves():
+    m = {"imagination_gap": 0.185, "imagination_gap_se_eval_horizon": 0.01,
+         "imagination_gap_position_eval_horizon": 0.073, "imagination_gap_yaw_eval_horizon": 0.112,
+         "imagination_gap_train_horizon": 0.05, "imagined_return_per_step": -0.2, "real_return_per_step": -0.4,
+         "imagined_final_tee_dist": 0.1, "real_final_tee_dist": 0.16, "real_success_rate": 0.0,
+         "real_pusher_at_wall_share": 0.25}
+    t = nb05.sweep_table({(5, 0): m, (30, 0): m}, 30)
+    assert "of which yaw" in t and "| +0.073 | +0.112 |" in t and "0/30" in t and "25%" in t
+    lines = t.splitlines()
+    assert len(lines) == 4 and all(line.count("|") == lines[0].count("|") for line in lines)
+
+
+def test_every_05_claim_is_registered_and_pure():
+    from pusht.nb import claims
+    names = [n for n in claims.REGISTRY if n.startswith("05.")]
+    assert len(names) >= 30 and all(not claims.REGISTRY[n].fixed for n in names)
+    before = len(claims.LEDGER)
+    nb05.ex2_verdict(sweep([0.10, 0.15, 0.20]))
+    recs = claims.LEDGER[before:]
+    assert {r["claim"] for r in recs} == {"05.gap_rose", "05.gap_fell", "05.gap_change_detected"}
+    for r in recs:                                   # re-evaluated on its recorded inputs, the same outcome
+        assert claims.REGISTRY[r["claim"]].predicate(**r["inputs"]) == r["holds"]
+    assert nb05.dream_turns_untouched_block(dream_deg=37.0, real_deg=87.0, tol_deg=10.0)
+    assert not nb05.dream_turns_untouched_block(dream_deg=80.0, real_deg=87.0, tol_deg=10.0)
+    assert nb05.dream_turns_untouched_block_away(dream_deg=87.0, real_deg=37.0, tol_deg=10.0)
+    assert nb05.seed_spread_matters(largest_range=0.05, min_effect=0.02)
+    assert not nb05.seed_spread_matters(largest_range=0.01, min_effect=0.02)
+    assert nb05.drift_same_every_run(values=[0.2, 0.2]) and not nb05.drift_same_every_run(values=[0.2, 0.3])
+    assert nb05.motion_same_every_horizon(rows=[[0.1, 0.2], [0.1, 0.2]])
+    assert not nb05.motion_same_every_horizon(rows=[[0.1, 0.2], [0.1, 0.3]])
+    assert nb05.penalty_beyond_training_span(whole=[-0.3, -0.31, -0.32], own=[0.0, 0.01, -0.01], min_effect=0.02)
+    assert not nb05.penalty_beyond_training_span(whole=[-0.3, -0.31, -0.32], own=[-0.3, -0.31, -0.32],
+                                                 min_effect=0.02)

@@ -156,14 +156,14 @@ def test_recap_quotes_notebook_01s_verdict():
 
 # --- figures ----------------------------------------------------------------------------------
 def test_every_figure_returns_a_labelled_figure():
-    assert_labelled(nb02.reward_heatmap_figure(reward_from_obs, MEAN, STD, PUSHER, n=21))
-    assert_labelled(nb02.reward_heatmap_figure(lambda o, m, s: tuple(torch.zeros(o.shape[:-1]) for _ in range(3)),
+    assert_labelled(nb02.fig_reward_heatmap(reward_from_obs, MEAN, STD, PUSHER, n=21))
+    assert_labelled(nb02.fig_reward_heatmap(lambda o, m, s: tuple(torch.zeros(o.shape[:-1]) for _ in range(3)),
                                                MEAN, STD, PUSHER, n=11))     # flat: no contour to draw
-    assert_labelled(nb02.reward_yaw_figure(reward_from_obs, MEAN, STD, PUSHER, 0.17))
+    assert_labelled(nb02.fig_reward_yaw(reward_from_obs, MEAN, STD, PUSHER, 0.17))
     views, dream_m = views_and_dream()
-    assert_labelled(nb02.reward_one_sequence_figure(views, 0, 0.1, context=2))
-    assert_labelled(nb02.final_pose_figure(dream_m[0, -1], dream_m[1, -1], 0, 1.0))
-    assert_labelled(nb02.reward_error_figure(nb02.reward_errors(views), np.arange(3, 11) * 0.1))
+    assert_labelled(nb02.fig_reward_one_sequence(views, 0, 0.1, context=2))
+    assert_labelled(nb02.fig_final_pose(dream_m[0, -1], dream_m[1, -1], 0, 1.0))
+    assert_labelled(nb02.fig_reward_error(nb02.reward_errors(views), np.arange(3, 11) * 0.1))
 
 
 def test_while_nbgrader_runs_a_notebook_no_figure_is_drawn_and_nothing_it_is_given_runs(monkeypatch):
@@ -174,11 +174,11 @@ def test_while_nbgrader_runs_a_notebook_no_figure_is_drawn_and_nothing_it_is_giv
 
     monkeypatch.setenv("NBGRADER_EXECUTION", "autograde")
     open_before = plt.get_fignums()
-    assert nb02.reward_heatmap_figure(learners, MEAN, STD, PUSHER, n=11) is None
+    assert nb02.fig_reward_heatmap(learners, MEAN, STD, PUSHER, n=11) is None
     assert plt.get_fignums() == open_before
     monkeypatch.delenv("NBGRADER_EXECUTION")
     with pytest.raises(RuntimeError, match="learner's reward ran"):
-        nb02.reward_heatmap_figure(learners, MEAN, STD, PUSHER, n=11)
+        nb02.fig_reward_heatmap(learners, MEAN, STD, PUSHER, n=11)
 
 
 def test_every_figure_function_of_every_notebook_is_skipped_while_grading():

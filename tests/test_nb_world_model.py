@@ -214,20 +214,20 @@ def test_most_moving_picks_the_sequence_whose_block_travels_farthest():
 # --- figures ----------------------------------------------------------------------------------
 def test_every_figure_returns_a_labelled_figure():
     obs = sequences(T=10, push_at=4)
-    assert_labelled(nb01.starts_figure(seeds=(0,)))
-    assert_labelled(nb01.expert_figure(obs[0], np.zeros((10, 2)), True))
+    assert_labelled(nb01.fig_starts(seeds=(0,)))
+    assert_labelled(nb01.fig_expert(obs[0], np.zeros((10, 2)), True))
     hist = {"recon": np.geomspace(1, 0.01, 20), "dyn": np.geomspace(0.02, 0.003, 20)}
-    assert_labelled(nb01.losses_figure(hist, n_updates_per_epoch=5, batch_size=32))
-    assert_labelled(nb01.losses_figure(hist))
-    assert_labelled(nb01.copy_last_figure(error_dict(), open_steps=8))
-    assert_labelled(nb01.copy_last_figure(error_dict(), open_steps=8, se={"one": np.full(6, 0.05),
+    assert_labelled(nb01.fig_losses(hist, n_updates_per_epoch=5, batch_size=32))
+    assert_labelled(nb01.fig_losses(hist))
+    assert_labelled(nb01.fig_copy_last(error_dict(), open_steps=8))
+    assert_labelled(nb01.fig_copy_last(error_dict(), open_steps=8, se={"one": np.full(6, 0.05),
                                                                           "open": np.full(6, 0.05)}))
-    assert_labelled(nb01.dream_vs_true_figure(obs[0], obs[0, 2:], context=2, first_push_step=4, index=0))
-    assert_labelled(nb01.dream_vs_true_figure(obs[0], obs[0, 2:], context=2, first_push_step=10, index=0))
+    assert_labelled(nb01.fig_dream_vs_true(obs[0], obs[0, 2:], context=2, first_push_step=4, index=0))
+    assert_labelled(nb01.fig_dream_vs_true(obs[0], obs[0, 2:], context=2, first_push_step=10, index=0))
 
 
 def test_the_loss_figure_names_both_losses_and_their_units():
-    fig = nb01.losses_figure({"recon": np.ones(4), "dyn": np.ones(4)}, 2, 32)
+    fig = nb01.fig_losses({"recon": np.ones(4), "dyn": np.ones(4)}, 2, 32)
     ax = fig.axes[0]
     labels = " ".join(t.get_text() for t in ax.get_legend().get_texts())
     assert "reconstruction" in labels and "dynamics" in labels and "standard deviation" in labels

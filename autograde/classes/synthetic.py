@@ -85,7 +85,7 @@ def build(executed: Path) -> dict[str, bytes]:
 
     # raises: the set-up cell fails, so everything after it fails too.
     nb = _load(executed, "03_imagination_actor")
-    setup = next(c for c in nb["cells"] if c["cell_type"] == "code" and "make_config(" in _src(c))
+    setup = next(c for c in nb["cells"] if c["cell_type"] == "code" and "setup(SEED" in _src(c))
     setup["source"] = "raise RuntimeError('my notebook is broken')\n" + _src(setup)
     files["raises_03_imagination_actor.ipynb"] = json.dumps(nb).encode()
 

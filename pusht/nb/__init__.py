@@ -6,6 +6,15 @@ saying which), and its self-check questions (``SELF_CHECKS``, see ``pusht.selfch
     world_model  notebook 01      reward   notebook 02      actor    notebook 03
     gap          notebook 04      horizon  notebook 05      closing  notebook 06
 
+and the rooms they share: ``session`` (the set-up cell's ``setup``), ``stats`` (the tests behind
+every verdict, with the minimum effect that matters), ``claims`` (the registry of claims about a
+run, checked by ``make claims``) and ``timing`` (each notebook's measured time).
+
+Figure functions are named ``fig_*``. Every notebook's set-up cell is one call, ``setup`` (module
+``pusht.nb.session``): the notebook's config, its folders under ``OUT``, and its ``show``::
+
+    cfg, GRADING, CACHE, FIGS, METRICS, show = setup(SEED, SMOKE, DEVICE, OUT, metrics="metrics/closing")
+
 Keeping them here leaves the notebooks' code cells short, and lets the tests run every figure and
 every conclusion without a kernel (``tests/test_nb_*.py``).
 """
@@ -37,3 +46,8 @@ def figure(draw):
         return draw(*args, **kwargs)
 
     return wrapper
+
+
+from pusht.nb.session import Session, setup  # noqa: E402  (after GRADING_ENV, which it imports)
+
+__all__ = ["GRADING_ENV", "Session", "figure", "setup"]

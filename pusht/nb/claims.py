@@ -57,6 +57,8 @@ def _plain(v):
     """A JSON-safe copy of one input (floats kept exact; NaN and inf as strings json can read)."""
     if isinstance(v, bool) or v is None or isinstance(v, str):
         return v
+    if hasattr(v, "tolist"):                                   # numpy scalars and arrays
+        return _plain(v.tolist())
     if isinstance(v, int):
         return int(v)
     if isinstance(v, float) or hasattr(v, "__float__") and not hasattr(v, "__len__"):

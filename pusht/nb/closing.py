@@ -20,8 +20,15 @@ why they are what they are):
   test is conservative (it calls fewer changes than the paired test would; the metrics do not keep
   the per-start values that test needs). A change counts beyond ``k`` standard errors, k the
   two-sided 95% point of Student's t at eval_episodes - 1 degrees of freedom
-  (:func:`pusht.nb.horizon.t_quantile`: 2.05 for 30 starts). A difference that large would turn up
-  by chance, in a run that changed nothing, in about one comparison in 20 or fewer.
+  (:func:`pusht.nb.stats.t_quantile`: 2.05 for 30 starts). A difference that large would turn up
+  by chance, in a run that changed nothing, in about one comparison in 20 or fewer. It must also be
+  at least the minimum effect that matters, ``stats.MIN_REWARD_EFFECT`` (0.02 reward per step: the
+  block held the 2 cm success tolerance nearer the target on every step). A gap **shrank** when its
+  size fell by both, without ending on the other side of zero beyond the noise (that is a change of
+  sign: the opposite error). A **fix** needs that at both horizons, and a zero-action dream that
+  keeps the untouched block within ``ARENA_HALF`` of the target (:func:`fix_verdict`).
+* **Claims.** Every sentence that depends on the run is chosen by a registered claim
+  (``pusht.nb.claims``, names "06.*"), so ``make claims`` records each one on every seed.
 * **Which world moved the gap.** The dream's and reality's ratings (reward per step) carry no
   standard error of their own in the metrics. Their changes are compared with the same yardstick,
   k standard errors of the gap's change: a noise scale measured on these starts, not a test of
@@ -51,8 +58,9 @@ import numpy as np
 
 from ..env import ARENA_HALF, CONTROL_DT, OBS_NAMES, SUCCESS_POS
 from ..selfcheck import Question
+from .claims import claim
 from .gap import NEAR
-from .stats import LEVEL, Test, t_quantile
+from .stats import LEVEL, MIN_REWARD_EFFECT, Test, outcome as _test_outcome, t_quantile
 from . import figure
 
 # 1 mm: the resolution at which the model's errors are read as changed. Physically: a thirtieth of
@@ -76,14 +84,19 @@ EX3_OPTIONS = {
          "real evaluation episode succeeds.",
     "b": "The gap **shrinks**, but real success **stays at 0%**: no real evaluation episode succeeds "
          "after the last round either.",
-    "c": "The gap **does not shrink** beyond the noise (it stays within what the evaluation starts "
-         "can tell apart, or it grows), and real success **stays at 0%**.",
-    "d": "The gap **does not shrink** beyond the noise, yet real success **rises above 0%**.",
+    "c": "The gap **does not shrink** (as the note defines it: it stays within the noise, moves by less than "
+         "the minimum effect, grows, or changes sign), and real success **stays at 0%**.",
+    "d": "The gap **does not shrink** (as the note defines it), yet real success **rises above 0%**.",
 }
 EX3_NOTE = ("\"Shrinks\" means: the gap's size |imagined minus real reward per step| over the whole "
-            "evaluation is smaller after the last round than in round 0, by more than the noise of the "
-            "two measurements allows (k standard errors of the change, k from Student's t over the "
-            "evaluation starts). A gap that changes sign and ends larger than it started has not shrunk.")
+            "evaluation is smaller after the last round than in round 0 (1) by more than the noise of the two "
+            "measurements allows: k standard errors of the change, a t-test on the two rounds' means over the "
+            "evaluation starts, k from Student's t at 95% two-sided; and (2) by at least the minimum effect "
+            f"that matters, {MIN_REWARD_EFFECT:.2f} reward per step (the reward of holding the block 2 cm, the "
+            "success tolerance, nearer the target on every step). A gap that ends on the other side of zero, "
+            "beyond the noise at both ends, has changed sign, not shrunk: the dream traded one error for the "
+            "opposite one. \"Rises above 0%\" means: more real successes after the last round than in round 0, "
+            "where one success counts (a success is an event, not an estimate).")
 
 
 @lru_cache(maxsize=None)
@@ -93,25 +106,150 @@ def k_for(n_starts: int, level: float = LEVEL) -> float:
     return t_quantile(n_starts - 1, level)
 
 
+# --- the claims: every run-dependent sentence of notebook 06 is decided by one of these ---------------
+def _crossed(first: float, first_se: float, last: float, last_se: float, k: float) -> bool:
+    return first * last < 0 and abs(first) > k * first_se and abs(last) > k * last_se
+
+
+def _size_fell(first, first_se, last, last_se, k, min_effect) -> bool:
+    drop = abs(first) - abs(last)
+    se = math.sqrt(first_se ** 2 + last_se ** 2)
+    return drop > k * se and drop >= min_effect and not _crossed(first, first_se, last, last_se, k)
+
+
+def _size_rose(first, first_se, last, last_se, k, min_effect) -> bool:
+    rise = abs(last) - abs(first)
+    se = math.sqrt(first_se ** 2 + last_se ** 2)
+    return rise > k * se and rise >= min_effect
+
+
+@claim("06.gap_shrank", "the gap's size fell by more than k standard errors of the change and by at least the "
+       "minimum effect, without ending on the other side of zero")
+def gap_shrank(*, first, first_se, last, last_se, k, min_effect):
+    return _size_fell(first, first_se, last, last_se, k, min_effect)
+
+
+@claim("06.gap_grew", "the gap's size rose by more than k standard errors of the change and by at least the "
+       "minimum effect")
+def gap_grew(*, first, first_se, last, last_se, k, min_effect):
+    return _size_rose(first, first_se, last, last_se, k, min_effect)
+
+
+@claim("06.gap_crossed_zero", "the gap ended on the other side of zero, beyond k standard errors at both ends")
+def gap_crossed_zero(*, first, first_se, last, last_se, k):
+    return _crossed(first, first_se, last, last_se, k)
+
+
+@claim("06.gap_reopened", "after its smallest round the gap's size rose again by the last round, beyond k "
+       "standard errors of that change and by at least the minimum effect")
+def gap_reopened(*, sizes, ses, k, min_effect):
+    i = int(np.argmin(sizes))
+    return i < len(sizes) - 1 and _size_rose(sizes[i], ses[i], sizes[-1], ses[-1], k, min_effect)
+
+
+@claim("06.change_up", "the quantity rose beyond k standard errors and by at least the minimum effect")
+def change_up(*, diff, se, k, min_effect):
+    return _test_outcome(diff, k * se, min_effect) == "up"
+
+
+@claim("06.change_down", "the quantity fell beyond k standard errors and by at least the minimum effect")
+def change_down(*, diff, se, k, min_effect):
+    return _test_outcome(diff, k * se, min_effect) == "down"
+
+
+@claim("06.dream_rosier", "the dream rated the policy above reality, beyond k standard errors and by at least the "
+       "minimum effect")
+def dream_rosier(*, value, se, k, min_effect):
+    return value > k * se and value >= min_effect
+
+
+@claim("06.dream_gloomier", "the dream rated the policy below reality, beyond k standard errors and by at least the "
+       "minimum effect")
+def dream_gloomier(*, value, se, k, min_effect):
+    return value < -k * se and -value >= min_effect
+
+
+@claim("06.yaw_half_larger", "the yaw half of the gap is larger in size than the position half")
+def yaw_half_larger(*, position, yaw):
+    return abs(yaw) > abs(position)
+
+
+@claim("06.dream_rewards_expert", "the dream pays the scripted expert's actions more than zero actions, beyond k "
+       "standard errors and by at least the minimum effect: it recognises success")
+def dream_rewards_expert(*, signal, se, k, min_effect):
+    return signal > k * se and signal >= min_effect
+
+
+@claim("06.dream_penalises_expert", "the dream pays the scripted expert's actions less than zero actions, beyond k "
+       "standard errors and by at least the minimum effect")
+def dream_penalises_expert(*, signal, se, k, min_effect):
+    return signal < -k * se and -signal >= min_effect
+
+
+@claim("06.success_rose", "more real successes after the last round than in round 0")
+def success_rose_claim(*, before, after):
+    return after > before
+
+
+@claim("06.untouched_block_on_table", "with zero actions the dreamed block ends, on average, no farther from the "
+       "target than the walls are")
+def untouched_block_on_table(*, final_dist, arena_half):
+    return final_dist <= arena_half
+
+
+@claim("06.fix_closed_gap", "the fix shrank the gap's size at both horizons (beyond k standard errors and the "
+       "minimum effect, not through zero) and its zero-action dream keeps the block on the table")
+def fix_closed_gap(*, first_tr, first_tr_se, last_tr, last_tr_se, first_ev, first_ev_se, last_ev, last_ev_se,
+                   k, min_effect, final_dist, arena_half):
+    return (_size_fell(first_tr, first_tr_se, last_tr, last_tr_se, k, min_effect)
+            and _size_fell(first_ev, first_ev_se, last_ev, last_ev_se, k, min_effect)
+            and final_dist <= arena_half)
+
+
+@claim("06.no_real_success", "no run of this notebook (loop, delta model, ensemble) had a single real success")
+def no_real_success(*, successes):
+    return all(int(x) == 0 for x in successes)
+
+
 @dataclass(frozen=True)
 class Change(Test):
-    """One quantity, measured twice: horizon's ``Test`` (``diff`` = last minus first, its standard
+    """One quantity, measured twice: stats' ``Test`` (``diff`` = last minus first, its standard
     error ``se`` = sqrt of the sum of the two squared standard errors, the degrees of freedom, the
-    threshold ``k`` and the ``outcome`` "up", "down" or "same", within k standard errors) plus the
-    two values themselves, ``first`` and ``last``."""
+    threshold ``k``, the minimum effect that matters and the ``outcome`` "up", "down" or "same")
+    plus the two values themselves, ``first`` and ``last``, with their own standard errors."""
 
     first: float = math.nan
     last: float = math.nan
+    first_se: float = math.nan
+    last_se: float = math.nan
+
+    @property
+    def crossed(self) -> bool:
+        """Ended on the other side of zero, beyond k of its own standard errors at both ends."""
+        return _crossed(self.first, self.first_se, self.last, self.last_se, self.k)
 
     @property
     def shrank(self) -> bool:
-        """The size |value| fell by more than k standard errors (toward zero, not through it)."""
-        return abs(self.first) - abs(self.last) > self.k * self.se
+        """The size |value| fell by more than k standard errors and by at least the minimum effect,
+        toward zero, not through it (a crossing beyond the noise is a change of sign)."""
+        return _size_fell(self.first, self.first_se, self.last, self.last_se, self.k, self.min_effect)
 
     @property
     def grew(self) -> bool:
-        """The size |value| rose by more than k standard errors."""
-        return abs(self.last) - abs(self.first) > self.k * self.se
+        """The size |value| rose by more than k standard errors and by at least the minimum effect."""
+        return _size_rose(self.first, self.first_se, self.last, self.last_se, self.k, self.min_effect)
+
+    def claims(self) -> dict:
+        """The registered claims on this change, evaluated (and recorded): shrank, grew, crossed."""
+        kw = dict(first=self.first, first_se=self.first_se, last=self.last, last_se=self.last_se, k=self.k)
+        return {"shrank": gap_shrank(**kw, min_effect=self.min_effect),
+                "grew": gap_grew(**kw, min_effect=self.min_effect),
+                "crossed": gap_crossed_zero(**kw)}
+
+    def direction(self) -> str:
+        """"up", "down" or "same", decided by the registered claims ``06.change_up``/``_down``."""
+        kw = dict(diff=self.diff, se=self.se, k=self.k, min_effect=self.min_effect)
+        return "up" if change_up(**kw) else "down" if change_down(**kw) else "same"
 
 
 def _outcome(diff: float, bar: float) -> str:
@@ -120,38 +258,49 @@ def _outcome(diff: float, bar: float) -> str:
     return "same"
 
 
+TEST_NAME = "t-test on two means over the same evaluation starts, their standard errors added in quadrature"
+
+
 def compare(first: float, first_se: float, last: float, last_se: float, n_starts: int,
-            level: float = LEVEL) -> Change:
+            level: float = LEVEL, min_effect: float = 0.0) -> Change:
     """Did a mean over ``n_starts`` evaluation starts change from ``first`` to ``last``, given each
-    one's standard error? (See the module doc for why this is conservative on shared starts.)"""
+    one's standard error, beyond k standard errors and by at least ``min_effect``? (See the module
+    doc for why this is conservative on shared starts.)"""
     se = float(math.sqrt(first_se ** 2 + last_se ** 2))
     k = k_for(int(n_starts), level)
     diff = float(last - first)
-    return Change(diff=diff, se=se, df=float(n_starts - 1), k=k, outcome=_outcome(diff, k * se),
-                  first=float(first), last=float(last))
+    return Change(diff=diff, se=se, df=float(n_starts - 1), k=k,
+                  outcome=_test_outcome(diff, k * se, min_effect), min_effect=float(min_effect),
+                  test=TEST_NAME, first=float(first), last=float(last), first_se=float(first_se),
+                  last_se=float(last_se))
 
 
-def metric_change(a: dict, b: dict, key: str, se_key: str, level: float = LEVEL) -> Change:
-    """``compare`` of ``a[key]`` (± ``a[se_key]``) and ``b[key]``, on ``b``'s evaluation starts."""
-    return compare(a[key], a[se_key], b[key], b[se_key], int(b["eval_episodes"]), level)
+def metric_change(a: dict, b: dict, key: str, se_key: str, level: float = LEVEL,
+                  min_effect: float = MIN_REWARD_EFFECT) -> Change:
+    """``compare`` of ``a[key]`` (± ``a[se_key]``) and ``b[key]``, on ``b``'s evaluation starts,
+    against ``min_effect`` (by default the minimum reward effect: these are rewards per step)."""
+    return compare(a[key], a[se_key], b[key], b[se_key], int(b["eval_episodes"]), level, min_effect)
 
 
-def _gap_keys(span: str) -> tuple[str, str]:
+def _gap_keys(span: str, part: str | None = None) -> tuple[str, str]:
     if span not in SPAN_KEYS:
         raise ValueError(f"span must be one of {SPAN_KEYS}, got {span!r}")
-    return f"imagination_gap_{span}", f"imagination_gap_se_{span}"
+    tag = f"_{part}" if part else ""
+    return f"imagination_gap{tag}_{span}", f"imagination_gap_se{tag}_{span}"
 
 
 def gap_change(rounds: list, span: str = "eval_horizon", level: float = LEVEL) -> Change:
     """The gap's change from round 0 to the last round (last minus round 0), over ``span``
-    ("eval_horizon": the whole evaluation, ``imagination_gap``; or "train_horizon")."""
+    ("eval_horizon": the whole evaluation, ``imagination_gap``; or "train_horizon"), against the
+    minimum reward effect ``MIN_REWARD_EFFECT``."""
     if len(rounds) < 2:
         raise ValueError(f"need round 0 and at least one later round, got {len(rounds)} round(s)")
     return metric_change(rounds[0], rounds[-1], *_gap_keys(span), level=level)
 
 
 def fix_change(ref: dict, fix: dict, span: str = "eval_horizon", level: float = LEVEL) -> Change:
-    """The gap of a fix (``fix``'s metrics) against the reference run ``ref``, over ``span``."""
+    """The gap of a fix (``fix``'s metrics) against the reference run ``ref``, over ``span``,
+    against the minimum reward effect."""
     return metric_change(ref, fix, *_gap_keys(span), level=level)
 
 
@@ -169,17 +318,23 @@ def count_rise_p(before: int, after: int, n: int) -> float:
                      for x in range(after, min(total, n) + 1)) / denom)
 
 
+@claim("06.count_change_beyond_chance", "a change of a count is beyond chance: Fisher's exact one-sided p below "
+       "the bar")
+def count_beyond_chance(*, p, bar):
+    return p < bar
+
+
 def success_rose(rounds: list) -> bool:
     """Exercise 3's "real success rises above 0%": more real successes after the last round than in
-    round 0 (a success is an event: one counts, see the module doc)."""
-    return successes(rounds[-1]) > successes(rounds[0])
+    round 0 (a success is an event: one counts, see the module doc). Claim ``06.success_rose``."""
+    return success_rose_claim(before=successes(rounds[0]), after=successes(rounds[-1]))
 
 
 def ex3_verdict(rounds: list) -> str:
     """Exercise 3's measured outcome, a letter of ``EX3_OPTIONS``: does the gap over the whole
-    evaluation shrink beyond the noise (:attr:`Change.shrank` of :func:`gap_change`), and does real
-    success rise?"""
-    shrank, rose = gap_change(rounds).shrank, success_rose(rounds)
+    evaluation shrink (claim ``06.gap_shrank``: beyond k standard errors and the minimum reward
+    effect, not through zero; see ``EX3_NOTE``), and does real success rise (``06.success_rose``)?"""
+    shrank, rose = gap_change(rounds).claims()["shrank"], success_rose(rounds)
     return {(True, True): "a", (True, False): "b", (False, False): "c", (False, True): "d"}[(shrank, rose)]
 
 
@@ -228,14 +383,20 @@ def sides(a: dict, b: dict, span: str = "eval_horizon") -> dict:
 
     The gap is the dream's rating minus reality's, so ``gap_diff == dream - real`` exactly. A side
     counts as moved when its change exceeds ``yardstick``, k standard errors of the gap's change
-    (the module doc says why that scale). Returns the changes, the yardstick and ``moved``, a dict
+    (the module doc says why that scale), and is at least the minimum reward effect (claims
+    ``06.change_up``/``06.change_down``). Returns the changes, the yardstick and ``moved``, a dict
     ``{"dream": "up"|"down"|"same", "real": ...}``."""
     c = fix_change(a, b, span)
     d_dream = float(b[_dream_key(span)] - a[_dream_key(span)])
     d_real = float(b[_real_key(span)] - a[_real_key(span)])
     bar = c.k * c.se
-    return {"dream": d_dream, "real": d_real, "gap": c.diff, "yardstick": bar,
-            "moved": {"dream": _outcome(d_dream, bar), "real": _outcome(d_real, bar)}}
+
+    def moved(d):
+        kw = dict(diff=d, se=c.se, k=c.k, min_effect=c.min_effect)
+        return "up" if change_up(**kw) else "down" if change_down(**kw) else "same"
+
+    return {"dream": d_dream, "real": d_real, "gap": c.diff, "yardstick": bar, "min_effect": c.min_effect,
+            "moved": {"dream": moved(d_dream), "real": moved(d_real)}}
 
 
 def _side_words(s: dict, a_name: str, b_name: str, a: dict, b: dict, span: str) -> str:
@@ -243,74 +404,157 @@ def _side_words(s: dict, a_name: str, b_name: str, a: dict, b: dict, span: str) 
     dk, rk = _dream_key(span), _real_key(span)
     text = (f"The dream's rating of the policy went from {a[dk]:+.3f} to {b[dk]:+.3f} per step ({s['dream']:+.3f}), "
             f"reality's from {a[rk]:+.3f} to {b[rk]:+.3f} ({s['real']:+.3f}), {a_name} to {b_name} "
-            f"(yardstick for either: {s['yardstick']:.3f}, k standard errors of the gap's change). ")
+            f"(a side counts as moved beyond {s['yardstick']:.3f}, k standard errors of the gap's change, and by "
+            f"at least {s['min_effect']:.2f}, the minimum effect). ")
     dream, real = s["moved"]["dream"], s["moved"]["real"]
     word = {"up": "rose", "down": "came down"}
     if dream != "same" and real == "same":
-        text += (f"So the gap moved from the dream's side: the dream's rating {word[dream]}, reality's stayed "
-                 "within the noise. ")
+        text += (f"So the gap moved from the dream's side: the dream's rating {word[dream]}, reality's did not "
+                 "move by that much. ")
     elif dream == "same" and real != "same":
         text += (f"So the gap moved from reality's side: what the policy really earns "
-                 f"{'rose' if real == 'up' else 'fell'}, the dream's rating stayed within the noise. ")
+                 f"{'rose' if real == 'up' else 'fell'}, the dream's rating did not move by that much. ")
     elif dream != "same":
         same_way = dream == real
         text += ("Both worlds' ratings moved, " + ("in the same direction, so part of each cancels in the gap. "
                                                    if same_way else "in opposite directions. "))
     else:
-        text += "Neither rating alone moved beyond that yardstick. "
+        text += "Neither rating alone moved by that much. "
     return text
 
 
+def _halves(m: dict, span: str = "eval_horizon") -> tuple[float, float, float, float]:
+    """The gap's position and yaw halves over ``span`` and their standard errors."""
+    p, pse = _gap_keys(span, "position")
+    y, yse = _gap_keys(span, "yaw")
+    return m[p], m[pse], m[y], m[yse]
+
+
+def yaw_share(m: dict, span: str = "eval_horizon") -> float:
+    """|yaw half| / (|position half| + |yaw half|) of the gap over ``span``: how much of the gap's
+    two parts is the block's angle (NaN when both are 0)."""
+    p, _, y, _ = _halves(m, span)
+    tot = abs(p) + abs(y)
+    return abs(y) / tot if tot > 0 else math.nan
+
+
+def halves_words(m: dict, span: str = "eval_horizon") -> str:
+    """"+0.073 ± 0.010 position and +0.112 ± 0.012 yaw: the yaw half is the larger" (claim
+    ``06.yaw_half_larger``), with a note when the two halves pull opposite ways."""
+    p, pse, y, yse = _halves(m, span)
+    larger = "yaw" if yaw_half_larger(position=p, yaw=y) else "position"
+    s = f"{_pm(p, pse)} from the block's position and {_pm(y, yse)} from its yaw: the {larger} half is the larger"
+    if p * y < 0:
+        s += " (the two halves have opposite signs and partly cancel)"
+    return s
+
+
+def expert_words(m: dict, span: str = "eval_horizon") -> tuple[str, str]:
+    """The expert control in one run: ``(numbers, verdict)``. Does the dream pay the scripted
+    expert's actions (which succeed in reality) more than zero actions? Claims
+    ``06.dream_rewards_expert`` and ``06.dream_penalises_expert``."""
+    n = int(m["eval_episodes"])
+    k = k_for(n)
+    d, dse = m[f"expert_signal_dream_{span}"], m[f"expert_signal_dream_se_{span}"]
+    r, rse = m[f"expert_signal_real_{span}"], m[f"expert_signal_real_se_{span}"]
+    nums = f"expert minus zero actions: dream {_pm(d, dse)}, reality {_pm(r, rse)} per step"
+    kw = dict(signal=d, se=dse, k=k, min_effect=MIN_REWARD_EFFECT)
+    if dream_rewards_expert(**kw):
+        verdict = "the dream recognises success: it pays the expert's pushes more than standing still"
+    elif dream_penalises_expert(**kw):
+        verdict = "the dream does not recognise success: it pays the expert's pushes less than standing still"
+    else:
+        verdict = ("the dream does not tell the expert's pushes from standing still (not beyond the noise and "
+                   f"the minimum effect of {MIN_REWARD_EFFECT:.2f})")
+    return nums, verdict
+
+
 # --- Exercise 3's reconciliation ------------------------------------------------------------------
+def _change_words(c: Change, cl: dict) -> str:
+    if cl["shrank"]:
+        return f"its size fell from {abs(c.first):.3f} to {abs(c.last):.3f}, beyond the noise and the minimum effect"
+    if cl["grew"]:
+        return f"its size rose from {abs(c.first):.3f} to {abs(c.last):.3f}, beyond the noise and the minimum effect"
+    if cl["crossed"]:
+        return "it changed sign beyond the noise: not a shrink, the opposite error"
+    return "its size did not fall beyond the noise and the minimum effect"
+
+
+def _sign_change_words(c: Change, cl: dict, a_name: str, b_name: str) -> str:
+    if not cl["crossed"]:
+        return ""
+    return (f" It changed sign: in {a_name} the dream rated the policy {'above' if c.first > 0 else 'below'} "
+            f"reality, in {b_name} {'above' if c.last > 0 else 'below'} it, both beyond the noise.")
+
+
+def reopen_words(rounds: list, span: str = "eval_horizon") -> str:
+    """Did the gap's size fall round after round, or reopen after its smallest round (claim
+    ``06.gap_reopened``)?"""
+    gk, sk = _gap_keys(span)
+    sizes = [abs(m[gk]) for m in rounds]
+    ses = [m[sk] for m in rounds]
+    k = k_for(int(rounds[-1]["eval_episodes"]))
+    i = int(np.argmin(sizes))
+    r_min = rounds[i]["round"]
+    if gap_reopened(sizes=sizes, ses=ses, k=k, min_effect=MIN_REWARD_EFFECT):
+        return (f"Its size was smallest in round {r_min} ({sizes[i]:.3f}) and then rose again to {sizes[-1]:.3f} "
+                "by the last round, beyond the noise and the minimum effect: the gap reopened.")
+    if i == len(sizes) - 1:
+        return f"Its size was smallest in the last round ({sizes[i]:.3f})."
+    return (f"Its size was smallest in round {r_min} ({sizes[i]:.3f}); the last round's {sizes[-1]:.3f} is not "
+            "larger beyond the noise and the minimum effect.")
+
+
 def reconcile_text(rounds: list) -> str:
     """Exercise 3's measured outcome in words: the gap over the whole evaluation in round 0 and after
-    the last round, its change against the noise, from which world's side it moved, the same at the
-    training horizon, and real success."""
+    the last round, its change against the noise and the minimum effect, round by round, from which
+    world's side it moved, the same at the training horizon, and real success."""
     first, last = rounds[0], rounds[-1]
     n, R = int(last["eval_episodes"]), int(last["round"])
     c = gap_change(rounds)
+    cl = c.claims()
     lines = [f"The gap over {_steps(last, 'eval_horizon')} (the whole evaluation, {n} starts): round 0 "
              f"{_pm(c.first, first['imagination_gap_se_eval_horizon'])}, after round {R} "
              f"{_pm(c.last, last['imagination_gap_se_eval_horizon'])} (imagined minus real reward per step)."]
-    per_round = ", ".join(f"{m['imagination_gap']:+.3f}" for m in rounds)
-    lines.append(f"Round by round: {per_round}.")
-    s = (f"The change is {c.diff:+.3f} ± {_se(c.se)} ({_ratio_words(c)}). The standard error adds the two "
-         "rounds' per-start standard errors in quadrature, as if the rounds had used independent starts; "
-         "they used the same ones, so this is conservative. ")
-    if c.shrank:
-        s += f"The gap shrank: its size fell from {abs(c.first):.3f} to {abs(c.last):.3f}, beyond the noise."
-    elif c.grew:
-        s += f"The gap grew: its size rose from {abs(c.first):.3f} to {abs(c.last):.3f}, beyond the noise."
-    elif c.outcome != "same":
-        s += ("The gap moved beyond the noise, but through zero: its size did not fall by more than the noise "
-              "allows, so it did not shrink.")
+    per_round = ", ".join(f"{m['imagination_gap_eval_horizon']:+.3f}" for m in rounds)
+    lines.append(f"Round by round: {per_round}. " + reopen_words(rounds))
+    s = (f"The change is {c.diff:+.3f} ± {_se(c.se)} ({_ratio_words(c)}; the minimum effect that matters is "
+         f"{c.min_effect:.2f} per step). The standard error adds the two rounds' per-start standard errors in "
+         "quadrature, as if the rounds had used independent starts; they used the same ones, so this is "
+         "conservative. ")
+    if cl["shrank"]:
+        s += (f"The gap shrank: its size fell from {abs(c.first):.3f} to {abs(c.last):.3f}, beyond the noise and "
+              "the minimum effect.")
+    elif cl["grew"]:
+        s += (f"The gap grew: its size rose from {abs(c.first):.3f} to {abs(c.last):.3f}, beyond the noise and "
+              "the minimum effect.")
+    elif cl["crossed"]:
+        s += ("The gap went through zero and out the other side, beyond the noise: it changed sign, which is "
+              "not a shrink.")
     else:
-        s += "The gap did not change beyond the noise: it did not shrink."
-    if np.sign(c.first) != np.sign(c.last) and c.outcome != "same":
-        s += (f" It changed sign: in round 0 the dream rated the policy {'above' if c.first > 0 else 'below'} "
-              f"reality, after round {R} {'above' if c.last > 0 else 'below'} it.")
+        s += "The gap's size did not fall beyond the noise and the minimum effect: it did not shrink."
+    s += _sign_change_words(c, cl, "round 0", f"round {R}")
     lines.append(s)
-    lines.append(_side_words(sides(first, last), "round 0", f"round {R}", first, last, "eval_horizon").strip())
-    if c.shrank and sides(first, last)["moved"] == {"dream": "down", "real": "same"}:
+    sd = sides(first, last)
+    lines.append(_side_words(sd, "round 0", f"round {R}", first, last, "eval_horizon").strip())
+    if cl["shrank"] and sd["moved"] == {"dream": "down", "real": "same"}:
         lines.append("The dream came down to meet reality; reality did not rise to meet the dream. The model "
                      "stopped promising what this policy does not deliver, which is not the same as the policy "
                      "delivering more.")
-    elif c.shrank and sides(first, last)["moved"] == {"dream": "same", "real": "up"}:
+    elif cl["shrank"] and sd["moved"] == {"dream": "same", "real": "up"}:
         lines.append("Reality rose to meet the dream: the policy earns more in the real world, and the model's "
-                     "rating of it did not move.")
+                     "rating of it did not move by that much.")
     ct = gap_change(rounds, "train_horizon")
     lines.append(f"Over {_steps(last, 'train_horizon')} (what the actor's gradient sees) the gap went "
                  f"{_pm(ct.first, first['imagination_gap_se_train_horizon'])} -> "
-                 f"{_pm(ct.last, last['imagination_gap_se_train_horizon'])}: "
-                 + ("it shrank beyond the noise." if ct.shrank else "it grew beyond the noise." if ct.grew
-                    else "its size did not fall beyond the noise."))
+                 f"{_pm(ct.last, last['imagination_gap_se_train_horizon'])}: {_change_words(ct, ct.claims())}.")
     s0, s1 = successes(first), successes(last)
     succ = f"Real successes: {', '.join(f'{successes(m)}/{n}' for m in rounds)} (round 0 to round {R}). "
-    if s1 > s0:
+    if success_rose(rounds):
         p = count_rise_p(s0, s1, n)
         succ += ("Real success rose" + (" above 0%" if s0 == 0 else "") + f" (Fisher's exact test, one-sided p = "
-                 f"{p:.3f}: " + ("beyond chance)." if p < COUNT_P else "with this few, it could be luck; rerun "
-                                 "another seed before believing it)."))
+                 f"{p:.3f}: " + ("beyond chance)." if count_beyond_chance(p=p, bar=COUNT_P) else
+                                 "with this few, it could be luck; rerun another seed before believing it)."))
     elif s0 == 0:
         succ += "Real success stayed at 0%."
     else:
@@ -332,7 +576,10 @@ def rounds_table(rounds: list) -> str:
             f"gap, {_short(last, 'eval_horizon')}", "dream", "real", "real successes", "touching the block",
             "block moved (m)", "block toward target (m)", "pusher at a wall",
             "one-step block: model / copy-last (mm)", "one-step pusher (mm)",
-            "open-loop block (mm)", "open-loop pusher (mm)"]
+            "open-loop block (mm)", "open-loop pusher (mm)",
+            f"gap's halves, {_short(last, 'eval_horizon')}: position / yaw",
+            f"expert signal in the dream, {_short(last, 'eval_horizon')}",
+            f"expert signal in reality, {_short(last, 'eval_horizon')}"]
     rows = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
 
     def err(m, kind, part):
@@ -344,19 +591,85 @@ def rounds_table(rounds: list) -> str:
         cells = [str(m["round"]), str(m.get("policy_episodes", "")),
                  _pm(m["imagination_gap_train_horizon"], m["imagination_gap_se_train_horizon"]),
                  _pm(m["imagination_gap_eval_horizon"], m["imagination_gap_se_eval_horizon"]),
-                 f"{m['imagined_return_per_step']:+.3f}", f"{m['real_return_per_step']:+.3f}",
+                 f"{m[_dream_key('eval_horizon')]:+.3f}", f"{m[_real_key('eval_horizon')]:+.3f}",
                  f"{successes(m)}/{n}", f"{m['real_episodes_touching_block']}/{n}",
                  f"{m['real_block_displacement']:.3f}", f"{m['real_block_toward_target']:+.3f}",
                  f"{m['real_pusher_at_wall_share']:.0%}",
                  err(m, "one_step", "block"), err(m, "one_step", "pusher"),
                  err(m, "open_loop", "block"), err(m, "open_loop", "pusher")]
+        p, pse, y, yse = _halves(m)
+        cells += [f"{_pm(p, pse)} / {_pm(y, yse)}",
+                  _pm(m["expert_signal_dream_eval_horizon"], m["expert_signal_dream_se_eval_horizon"]),
+                  _pm(m["expert_signal_real_eval_horizon"], m["expert_signal_real_se_eval_horizon"])]
         rows.append("| " + " | ".join(cells) + " |")
     rows.append("")
     rows.append("Gaps are imagined minus real reward per step, ± one standard error over the evaluation starts; "
-                "dream and real are reward per step over the whole evaluation; the last four columns are the "
-                "world model's RMSE on the policy's data (clips of that round's real evaluation rollouts, never "
-                "trained on) against copying the last frame.")
+                "dream and real are reward per step over the whole evaluation (pooled over every step of every "
+                "start, so the gap is exactly dream minus real); the four error columns are the world model's "
+                "RMSE on the policy's data (clips of that round's real evaluation rollouts, never trained on) "
+                "against copying the last frame. The gap's halves: the reward is a position term "
+                "plus a yaw term, and the gap splits exactly into the two. The expert signal: the scripted "
+                "expert's reward minus zero actions' reward per step, from the same starts, in each world (the "
+                "expert's own actions replayed in the dream): positive means that world pays the pushes that "
+                "solve the task more than standing still.")
     return "\n".join(rows)
+
+
+def rounds_sentence(rounds: list) -> str:
+    """Per round: the gap's position and yaw halves and which is the larger (claim
+    ``06.yaw_half_larger``), at both horizons for the first and last round; and the expert control:
+    does the dream recognise success in each round, and did the loop teach the model to reward the
+    expert's pushes (claims ``06.dream_rewards_expert``, ``06.change_up``/``_down`` on its change)?"""
+    first, last = rounds[0], rounds[-1]
+    R = last["round"]
+    per = "; ".join(f"round {m['round']}: {halves_words(m)}" for m in rounds)
+    lines = [f"**The gap's two halves** over {_steps(last, 'eval_horizon')} (imagined minus real reward per "
+             f"step, ± one standard error): {per}."]
+    lines.append(f"Over {_steps(last, 'train_horizon')}, round 0: {halves_words(first, 'train_horizon')}; after "
+                 f"round {R}: {halves_words(last, 'train_horizon')}.")
+    yaw_rounds = [m["round"] for m in rounds
+                  if yaw_half_larger(position=_halves(m)[0], yaw=_halves(m)[2])]
+    if len(yaw_rounds) == len(rounds):
+        lines.append(f"Over {_steps(last, 'eval_horizon')}, in every round, the block's angle, not its distance, "
+                     "is the larger part of the gap: a figure of where the block sits shows only the smaller half.")
+    elif not yaw_rounds:
+        lines.append(f"Over {_steps(last, 'eval_horizon')}, in every round, the block's distance to the target is "
+                     "the larger part of the gap.")
+    else:
+        lines.append(f"Over {_steps(last, 'eval_horizon')} the larger half changes from round to round (yaw in "
+                     "round" + ("s " if len(yaw_rounds) > 1 else " ") + ", ".join(str(r) for r in yaw_rounds)
+                     + ", position in the others).")
+    short = {}
+    for m in rounds:
+        n = int(m["eval_episodes"])
+        kw = dict(signal=m["expert_signal_dream_eval_horizon"], se=m["expert_signal_dream_se_eval_horizon"],
+                  k=k_for(n), min_effect=MIN_REWARD_EFFECT)
+        short[m["round"]] = ("pays them more than standing still" if dream_rewards_expert(**kw) else
+                             "pays them less than standing still" if dream_penalises_expert(**kw) else
+                             "does not tell them from standing still")
+    per_e = "; ".join(f"round {m['round']}: {_pm(m['expert_signal_dream_eval_horizon'], m['expert_signal_dream_se_eval_horizon'])}"  # noqa: E501
+                      f" ({short[m['round']]})" for m in rounds)
+    reals = [_pm(m["expert_signal_real_eval_horizon"], m["expert_signal_real_se_eval_horizon"]) for m in rounds]
+    real = (f"{reals[0]} in every round (the same expert from the same starts)" if len(set(reals)) == 1
+            else ", ".join(reals) + f" (round 0 to round {R})")
+    wins = ", ".join(f"{int(round(m['expert_real_success_rate'] * m['eval_episodes']))}/{int(m['eval_episodes'])}"
+                     for m in rounds[:1])
+    lines.append("**Does the dream recognise success?** The control is the scripted expert, which succeeds in "
+                 f"reality from {wins} of these starts. Its actions, replayed in the dream, minus zero actions, per "
+                 f"step over {_steps(last, 'eval_horizon')}: {per_e}. In reality the same difference is {real}. A "
+                 "dream counts as recognising success when it pays the expert's pushes more than standing still "
+                 f"by more than k standard errors and at least {MIN_REWARD_EFFECT:.2f} per step.")
+    c = metric_change(first, last, "expert_signal_dream_eval_horizon", "expert_signal_dream_se_eval_horizon")
+    d = c.direction()
+    lines.append(f"From round 0 to round {R} the dream's expert signal changed by {c.diff:+.3f} ± {_se(c.se)} "
+                 f"({_ratio_words(c)}; minimum effect {c.min_effect:.2f}): "
+                 + {"up": "the loop taught the model to pay the expert's pushes more, beyond the noise and the "
+                          "minimum effect.",
+                    "down": "the loop made the model pay the expert's pushes less, beyond the noise and the minimum "
+                            "effect.",
+                    "same": "the loop did not change what the model pays the expert's pushes, beyond the noise "
+                            "and the minimum effect."}[d])
+    return "\n\n".join(lines)
 
 
 def _step_words(values) -> list[str]:
@@ -426,26 +739,48 @@ def model_error_sentence(rounds: list) -> str:
         for part in ("block", "pusher"):
             v = _series(rounds, f"wm_{data}_open_loop_{part}_err")
             d = _outcome(v[-1] - v[0], ERR_RES)
-            verb = {"down": "fell", "up": "rose", "same": "within 1 mm"}[d]
-            ol.append(f"{DATA_LABELS[data]}, {part}: {_arrow([v[0], v[-1]])} ({verb})")
-    out.append(f"Open-loop (the dream running alone through each clip), from round 0 to round {R}: "
+            verb = {"down": "fell overall", "up": "rose overall", "same": "within 1 mm overall"}[d]
+            ol.append(f"{DATA_LABELS[data]}, {part}: {_arrow(v)} ({verb}; {trend_phrase(v, idx)})")
+    out.append(f"Open-loop (the dream running alone through each clip), round 0 to round {R}: "
                + "; ".join(ol) + ".")
-    pol = [_outcome(rounds[-1][f"wm_policy_one_step_{p}_err"] - rounds[0][f"wm_policy_one_step_{p}_err"], ERR_RES)
-           for p in ("block", "pusher")]
-    exp = [_outcome(rounds[-1][f"wm_expert_{k}_{p}_err"] - rounds[0][f"wm_expert_{k}_{p}_err"], ERR_RES)
-           for k in ("one_step", "open_loop") for p in ("block", "pusher")]
+
+    def ends(key):
+        return [rounds[0][key], rounds[-1][key]]
+
+    pol = [ends(f"wm_policy_{k}_{p}_err") for k in ("one_step", "open_loop") for p in ("block", "pusher")]
+    exp = [ends(f"wm_expert_{k}_{p}_err") for k in ("one_step", "open_loop") for p in ("block", "pusher")]
     share = ""
     if "train_clips" in rounds[0] and rounds[-1]["train_clips"] > 0:
         share = (f" (after round {R}, {1 - rounds[0]['train_clips'] / rounds[-1]['train_clips']:.0%} of its "
                  f"{rounds[-1]['train_clips']} training clips are the policy's)")
-    if all(p == "down" for p in pol) and "up" in exp:
-        out.append("So the model got better where the policy goes and worse, on some measures, where the expert "
-                   f"went: its training data moved toward the policy's{share}.")
-    elif all(p == "down" for p in pol):
-        out.append("So the model got better where the policy goes, without losing ground on the expert's data.")
-    elif "up" in pol:
-        out.append("So more data of the policy's own did not make the model better on it at every measure.")
+    better = model_better_on_policy(firsts=[a for a, _ in pol], lasts=[b for _, b in pol], res=ERR_RES)
+    worse_expert = model_worse_somewhere(firsts=[a for a, _ in exp], lasts=[b for _, b in exp], res=ERR_RES)
+    if better and worse_expert:
+        out.append("So, from round 0 to the last round, the model got better on the policy's data at every measure "
+                   "here and worse, on some measures, on the expert's: its training data moved toward the "
+                   f"policy's{share}.")
+    elif better:
+        out.append("So, from round 0 to the last round, the model got better on the policy's data at every measure "
+                   "here, without losing ground on the expert's data.")
+    elif model_worse_somewhere(firsts=[a for a, _ in pol], lasts=[b for _, b in pol], res=ERR_RES):
+        out.append("So more data of the policy's own did not make the model better on it at every measure: on "
+                   "some it ended worse than in round 0.")
+    else:
+        out.append("So more data of the policy's own did not make the model better on it at every measure: on "
+                   "some it stayed within 1 mm of round 0.")
     return " ".join(out)
+
+
+@claim("06.model_better_on_policy_data", "from round 0 to the last round every error of the model on the policy's "
+       "data (one-step and open-loop, block and pusher) fell by more than 1 mm")
+def model_better_on_policy(*, firsts, lasts, res):
+    return all(b < a - res for a, b in zip(firsts, lasts))
+
+
+@claim("06.model_worse_somewhere", "from round 0 to the last round at least one of these errors of the model rose by "
+       "more than 1 mm")
+def model_worse_somewhere(*, firsts, lasts, res):
+    return any(b > a + res for a, b in zip(firsts, lasts))
 
 
 def displacement_se_bound(m: dict) -> float:
@@ -472,7 +807,19 @@ def toward_outcome(m: dict) -> str:
     average, judged against k times :func:`toward_se_bound` (and at least ``NEAR``, 5 mm)."""
     bar = max(k_for(int(m["eval_episodes"])) * toward_se_bound(m), NEAR)
     t = m["real_block_toward_target"]
-    return "closer" if t > bar else "farther" if t < -bar else "same"
+    return "closer" if block_closer(toward=t, bar=bar) else "farther" if block_farther(toward=t, bar=bar) else "same"
+
+
+@claim("06.block_closer", "on average the real block ends nearer the target than it spawned, beyond k bounds on its "
+       "standard error and at least 5 mm")
+def block_closer(*, toward, bar):
+    return toward > bar
+
+
+@claim("06.block_farther", "on average the real block ends farther from the target than it spawned, beyond k bounds "
+       "on its standard error and at least 5 mm")
+def block_farther(*, toward, bar):
+    return toward < -bar
 
 
 def block_sentence(rounds: list) -> str:
@@ -488,10 +835,12 @@ def block_sentence(rounds: list) -> str:
     s += f"The pusher touched the block in {touches} of {n} evaluation episodes"
     if t1 > t0:
         p = count_rise_p(t0, t1, n)
-        s += f" (a rise {'beyond chance' if p < COUNT_P else 'that could be chance'}: Fisher's one-sided p = {p:.3f}). "
+        s += (f" (a rise {'beyond chance' if count_beyond_chance(p=p, bar=COUNT_P) else 'that could be chance'}: "
+              f"Fisher's one-sided p = {p:.3f}). ")
     elif t1 < t0:
         p = count_rise_p(t1, t0, n)
-        s += f" (a fall {'beyond chance' if p < COUNT_P else 'that could be chance'}: Fisher's one-sided p = {p:.3f}). "
+        s += (f" (a fall {'beyond chance' if count_beyond_chance(p=p, bar=COUNT_P) else 'that could be chance'}: "
+              f"Fisher's one-sided p = {p:.3f}). ")
     else:
         s += ". "
     c = compare(first["real_block_displacement"], displacement_se_bound(first), last["real_block_displacement"],
@@ -500,7 +849,7 @@ def block_sentence(rounds: list) -> str:
           f"{last['real_block_displacement']:.3f} m after round {R} (at most "
           f"{last['real_block_displacement_max']:.3f} m): "
           + {"up": "more, beyond the noise. ", "down": "less, beyond the noise. ",
-             "same": "not told apart by these starts. "}[c.outcome])
+             "same": "not told apart by these starts. "}[c.direction()])
     t = last["real_block_toward_target"]
     bound = toward_se_bound(last)
     out = toward_outcome(last)
@@ -510,7 +859,7 @@ def block_sentence(rounds: list) -> str:
           "same": "not told apart from where it spawned. "}[out]
     s += (f"It ends {last['real_final_tee_dist']:.3f} m from the target on average; a success needs "
           f"{SUCCESS_POS:.2f} m. ")
-    if c.outcome == "up" and out != "closer":
+    if c.direction() == "up" and out != "closer":
         s += ("The policy moves the block more, but not toward the target: touching the block is not yet "
               "pushing it where it should go.")
     elif out == "closer":
@@ -529,14 +878,76 @@ def expert_ratio(m: dict, kind: str, dim: str) -> float:
 
 
 def _sign_word(v: float, se: float, k: float) -> str:
-    return "rosier than reality" if v > k * se else "gloomier than reality" if v < -k * se \
-        else "not told apart from reality"
+    """"rosier than reality", "gloomier than reality" or "not told apart from reality": beyond k
+    standard errors and the minimum reward effect (claims ``06.dream_rosier``/``06.dream_gloomier``)."""
+    kw = dict(value=v, se=se, k=k, min_effect=MIN_REWARD_EFFECT)
+    if dream_rosier(**kw):
+        return "rosier than reality"
+    if dream_gloomier(**kw):
+        return "gloomier than reality"
+    return "not told apart from reality"
+
+
+@claim("06.beats_copy_last_everywhere", "the model's one-step error is below copy-last's on every observation "
+       "dimension (held-out expert data)")
+def beats_copy_last_everywhere(*, ratios):
+    return all(math.isfinite(x) and x < 1 for x in ratios)
+
+
+@claim("06.model_moves_untouched_block", "with zero actions the dreamed block ends more than 5 mm nearer or farther "
+       "from the target than it spawned (a real untouched block does not move)")
+def model_moves_untouched_block(*, final_dist, spawn_dist, tol):
+    return abs(final_dist - spawn_dist) > tol
+
+
+@claim("06.pusher_left_table", "replaying the policy's real actions, the dreamed pusher ends farther from the real "
+       "one than the arena is wide")
+def pusher_left_table(*, err, arena):
+    return err > arena
+
+
+@claim("06.error_accumulates", "replaying the policy's real actions over the whole evaluation, the fix's dreamed "
+       "pusher ends farther off than the state model's")
+def error_accumulates(*, fix_err, ref_err):
+    return fix_err > ref_err
+
+
+def fix_verdict(ref: dict, fix: dict, name: str, ref_name: str) -> tuple[bool, str]:
+    """Does ``fix`` count as a fix against ``ref``? Claim ``06.fix_closed_gap``: the gap's size shrank
+    at both horizons, beyond k standard errors of the change and by at least ``MIN_REWARD_EFFECT``,
+    without crossing zero beyond the noise, and the fix's zero-action dream keeps the untouched block
+    on the table (``zero_action_dream_final_tee_dist`` at most ``ARENA_HALF``). Returns the verdict
+    and a sentence with each condition's numbers."""
+    parts = []
+    changes = {}
+    for span in SPAN_KEYS:
+        c = fix_change(ref, fix, span)
+        changes[span] = c
+        cl = c.claims()
+        parts.append(f"over {_steps(fix, span)} {c.first:+.3f} -> {c.last:+.3f} ± {_se(c.last_se)} "
+                     f"({_change_words(c, cl)})")
+    zd = fix["zero_action_dream_final_tee_dist"]
+    on_table = untouched_block_on_table(final_dist=zd, arena_half=ARENA_HALF)
+    table = (f"with zero actions its dreamed block ends {zd:.3f} m from the target on average (it spawned "
+             f"{fix['spawn_tee_dist']:.3f} m away, and a real untouched block does not move), "
+             + ("within" if on_table else "farther than")
+             + f" the {ARENA_HALF:.1f} m from the target to the nearest wall")
+    tr, ev = changes["train_horizon"], changes["eval_horizon"]
+    holds = fix_closed_gap(first_tr=tr.first, first_tr_se=tr.first_se, last_tr=tr.last, last_tr_se=tr.last_se,
+                           first_ev=ev.first, first_ev_se=ev.first_se, last_ev=ev.last, last_ev_se=ev.last_se,
+                           k=ev.k, min_effect=ev.min_effect, final_dist=zd, arena_half=ARENA_HALF)
+    verdict = (f"{name} counts as a fix of the gap" if holds else f"{name} does not count as a fix of the gap")
+    text = (f"{verdict}: against {ref_name} its gap went " + "; ".join(parts) + f", and {table}. A fix needs "
+            f"the gap's size to fall at both horizons, beyond the noise and by at least {MIN_REWARD_EFFECT:.2f} per "
+            "step, without crossing zero, and a dream that keeps an untouched block on the table.")
+    return holds, text
 
 
 def delta_sentence(state_m: dict, delta_m: dict) -> str:
     """The delta model against the state model: copy-last ratios on the block (one-step and
-    open-loop, expert data), the gap at the training horizon and over the whole evaluation, the
-    zero-action dream, and the pusher's replay error at the end of the evaluation."""
+    open-loop, expert data), the gap at the training horizon and over the whole evaluation (and its
+    halves), the zero-action dream, the pusher's replay error at the end of the evaluation, the
+    expert control, and whether it counts as a fix (:func:`fix_verdict`)."""
     n = int(delta_m["eval_episodes"])
     k = k_for(n)
     pos = ("tee_x", "tee_y")
@@ -544,24 +955,23 @@ def delta_sentence(state_m: dict, delta_m: dict) -> str:
          for name, m in (("state", state_m), ("delta", delta_m))}
     all_dims = [expert_ratio(delta_m, "one_step", d) for d in OBS_NAMES]
     # a ratio of 1 is copy-last itself: the baseline, not a tolerance
-    beats = all(np.isfinite(x) and x < 1 for x in all_dims)
     fmt = lambda xs: "/".join(f"{x:.2f}" for x in xs)        # noqa: E731
     s = (f"On held-out expert data, the delta model's block position error is {fmt(r['delta']['one_step'])} (x/y) "
          f"of copy-last's one step ahead and {fmt(r['delta']['open_loop'])} open-loop; the state model's "
          f"{fmt(r['state']['one_step'])} and {fmt(r['state']['open_loop'])}. ")
-    s += ("One step ahead it beats copy-last on every dimension. " if beats else
+    s += ("One step ahead it beats copy-last on every dimension. " if beats_copy_last_everywhere(ratios=all_dims) else
           f"One step ahead it beats copy-last on {sum(np.isfinite(x) and x < 1 for x in all_dims)} of "
           f"{len(all_dims)} dimensions. ")
-    gaps = []
+    words = {}
     for span in SPAN_KEYS:
         g, se = delta_m[f"imagination_gap_{span}"], delta_m[f"imagination_gap_se_{span}"]
         gs = state_m[f"imagination_gap_{span}"]
-        gaps.append((span, g, se))
-        s += (f"Over {_steps(delta_m, span)} its gap is {_pm(g, se)} ({_sign_word(g, se, k)}; the state model "
+        words[span] = _sign_word(g, se, k)
+        s += (f"Over {_steps(delta_m, span)} its gap is {_pm(g, se)} ({words[span]}; the state model "
               f"{gs:+.3f}). ")
-    (_, g_tr, se_tr), (_, g_ev, se_ev) = gaps
+    s += f"Over the whole evaluation its gap is {halves_words(delta_m)}. "
     mood = {"rosier than reality": "rosy", "gloomier than reality": "gloomy"}
-    w_tr, w_ev = _sign_word(g_tr, se_tr, k), _sign_word(g_ev, se_ev, k)
+    w_tr, w_ev = words["train_horizon"], words["eval_horizon"]
     if {w_tr, w_ev} == set(mood):
         s += (f"Its dream is {mood[w_tr]} over the span the actor trained on and {mood[w_ev]} over the whole "
               "evaluation: it changed sign on the way. ")
@@ -572,7 +982,12 @@ def delta_sentence(state_m: dict, delta_m: dict) -> str:
           f"{zd:.3f} m from the target on average, where it spawned {spawn:.3f} m away")
     # NEAR (5 mm): an untouched real block does not move at all, so a dreamed one that ends more
     # than that away from its spawn distance was moved by the model alone
-    s += (": the model moves a block nobody touches. " if abs(zd - spawn) > NEAR else ". ")
+    s += (": the model moves a block nobody touches" if model_moves_untouched_block(
+        final_dist=zd, spawn_dist=spawn, tol=NEAR) else "")
+    if not untouched_block_on_table(final_dist=zd, arena_half=ARENA_HALF):
+        s += (f". That is farther from the target than the walls are ({ARENA_HALF:.1f} m): a runaway dream, "
+              "which carries untouched blocks into the corners or off the table")
+    s += ". "
     e_tr, e_ev = delta_m["replay_pusher_err_train_horizon"], delta_m["replay_pusher_err_eval_horizon"]
     H = delta_m.get("imag_horizon")
     at_tr = f"after {H * CONTROL_DT:.1f} s" if H else "at the training horizon"
@@ -580,38 +995,50 @@ def delta_sentence(state_m: dict, delta_m: dict) -> str:
     s += (f"Replaying the policy's real actions, its dreamed pusher is {e_tr:.3f} m off {at_tr} and "
           f"{e_ev:.3f} m off after {secs:.0f} s (state model: {state_m['replay_pusher_err_train_horizon']:.3f} "
           f"and {state_m['replay_pusher_err_eval_horizon']:.3f} m). ")
-    if e_ev > ARENA:
+    if pusher_left_table(err=e_ev, arena=ARENA):
         s += (f"That is farther than the arena is wide ({ARENA:.0f} m): the dreamed pusher has left the table. ")
     clip = delta_m["train_clip_steps"]
-    if e_ev > state_m["replay_pusher_err_eval_horizon"]:
+    if error_accumulates(fix_err=e_ev, ref_err=state_m["replay_pusher_err_eval_horizon"]):
         s += (f"A change-predicting model adds each step's small error to all the earlier ones, and it trained on "
               f"{clip}-step clips: nothing in its training saw what {delta_m['dream_steps_per_train_clip']:.2f} "
-              "times as many accumulated steps do. Beating copy-last one step ahead says nothing about that.")
+              "times as many accumulated steps do. Beating copy-last one step ahead says nothing about that. ")
     else:
-        s += f"Over {delta_m['eval_horizon']} steps its accumulated changes stay no farther off than the state model's."
-    return s
+        s += (f"Over {delta_m['eval_horizon']} steps its accumulated changes stay no farther off than the state "
+              "model's. ")
+    nums, verdict = expert_words(delta_m)
+    s += f"The expert control ({nums}): {verdict}. "
+    s += fix_verdict(state_m, delta_m, "Predicting changes", "the state model")[1]
+    return s.strip()
+
+
+@claim("06.shared_bias", "the ensemble members disagree less (the larger disagreement figure) than their mean dream "
+       "errs from reality (the smaller error figure)")
+def shared_bias(*, disagreement, error):
+    return disagreement < error
 
 
 def ensemble_sentence(single_m: dict, ens_m: dict, penalty: float | None = None) -> str:
-    """The ensemble (with MOPO's penalty) against the single model: its gap at both horizons, real
-    return and successes, and its members' disagreement (m) against its error from reality.
+    """The ensemble (with MOPO's penalty) against the single model: its gap at both horizons (and its
+    halves), real return and successes, its members' disagreement (m) against its error from
+    reality, the expert control, and whether it counts as a fix (:func:`fix_verdict`).
     ``penalty``: the run's ``disagreement_penalty`` (reward per step per metre), if known."""
     n = int(ens_m["eval_episodes"])
     s = ""
     for span in SPAN_KEYS:
         c = fix_change(single_m, ens_m, span)
-        word = {"up": "rosier than the single model's, beyond the noise",
-                "down": "less rosy than the single model's, beyond the noise",
-                "same": "not told apart from the single model's"}[c.outcome]
+        word = {"up": "higher than the single model's, beyond the noise and the minimum effect",
+                "down": "lower than the single model's, beyond the noise and the minimum effect",
+                "same": "not told apart from the single model's"}[c.direction()]
         s += (f"Over {_steps(ens_m, span)} the ensemble's gap is {_pm(c.last, ens_m[f'imagination_gap_se_{span}'])} "
               f"against the single model's {_pm(c.first, single_m[f'imagination_gap_se_{span}'])}: "
-              f"{c.diff:+.3f}, {word} ({_ratio_words(c)}). ")
+              f"{c.diff:+.3f}, {word} ({_ratio_words(c)}; minimum effect {c.min_effect:.2f}). ")
+    s += f"Over the whole evaluation its gap is {halves_words(ens_m)}. "
     sd = sides(single_m, ens_m)
-    s += (f"Reality pays its policy {ens_m['real_return_per_step']:+.3f} per step, the single model's "
-          f"{single_m['real_return_per_step']:+.3f} ({sd['real']:+.3f}; "
-          + ("within" if sd["moved"]["real"] == "same" else "beyond")
-          + f" the yardstick of {sd['yardstick']:.3f}); real successes {successes(ens_m)}/{n} against "
-          f"{successes(single_m)}/{n}. ")
+    s += (f"Reality pays its policy {ens_m[_real_key('eval_horizon')]:+.3f} per step, the single model's "
+          f"{single_m[_real_key('eval_horizon')]:+.3f} ({sd['real']:+.3f}; "
+          + ("not moved by" if sd["moved"]["real"] == "same" else "moved beyond")
+          + f" the yardstick of {sd['yardstick']:.3f} and the minimum effect); real successes {successes(ens_m)}/{n} "
+          f"against {successes(single_m)}/{n}. ")
     if "wm_ensemble_disagreement_train_horizon" not in ens_m:
         return s + "These metrics hold no ensemble disagreement (a single model has none)."
     dis_tr, dis_ev = ens_m["wm_ensemble_disagreement_train_horizon"], ens_m["wm_ensemble_disagreement_eval_horizon"]
@@ -622,40 +1049,81 @@ def ensemble_sentence(single_m: dict, ens_m: dict, penalty: float | None = None)
           f"training horizon and {err_ev:.3f} m at the end. ")
     # the most cautious comparison the metrics allow: the larger disagreement figure against the
     # smaller error figure (the disagreement is a mean over steps, the error a value at one step)
-    if max(dis_tr, dis_ev) < min(err_tr, err_ev):
+    if shared_bias(disagreement=max(dis_tr, dis_ev), error=min(err_tr, err_ev)):
         s += (f"The members are closer to each other than their mean is to reality (by a factor of at least "
-              f"{min(err_tr, err_ev) / max(dis_tr, dis_ev):.1f}, the smaller error over the larger disagreement): most of the error is one they share, a bias "
-              "of the data they all learned from, and a penalty on disagreement cannot see it. ")
+              f"{min(err_tr, err_ev) / max(dis_tr, dis_ev):.1f}, the smaller error over the larger disagreement): most "
+              "of the error is one they share, a bias of the data they all learned from, and a penalty on "
+              "disagreement cannot see it. ")
     else:
         s += "Their disagreement is as large as their error from reality: here it does flag the error. "
     if penalty is not None:
         gap_tr = ens_m["imagination_gap_train_horizon"]
         s += (f"With a penalty of {penalty:g} per metre the actor paid about {penalty * dis_tr:.3f} per step of "
-              f"dreamed reward over its training horizon, against a gap of {gap_tr:+.3f} there.")
+              f"dreamed reward over its training horizon, against a gap of {gap_tr:+.3f} there. ")
+    nums, verdict = expert_words(ens_m)
+    s += f"The expert control ({nums}): {verdict}. "
+    s += fix_verdict(single_m, ens_m, "The ensemble with its penalty", "the single model")[1]
     return s.strip()
 
 
 # --- the conclusion -------------------------------------------------------------------------------
 def _fix_line(name: str, ref: dict, fix: dict, ref_name: str) -> str:
     n = int(fix["eval_episodes"])
-    c = fix_change(ref, fix)
     sd = sides(ref, fix)
-    dream = (f"in the dream, its gap over the whole evaluation went {c.first:+.3f} -> {c.last:+.3f} against "
-             f"{ref_name} ("
-             + ("its size shrank beyond the noise" if c.shrank else "its size grew beyond the noise" if c.grew
-                else "its size did not shrink beyond the noise")
-             + (", and it changed sign" if c.outcome != "same" and np.sign(c.first) != np.sign(c.last) else "")
-             + ")")
-    real = (f"in reality, the policy earns {fix['real_return_per_step']:+.3f} per step against "
-            f"{ref['real_return_per_step']:+.3f} ("
-            + ("within" if sd["moved"]["real"] == "same" else "beyond") + f" the yardstick of {sd['yardstick']:.3f})"
-            f" and succeeds {successes(fix)}/{n} times against {successes(ref)}/{n}")
-    return f"**{name}**: {dream}; {real}."
+    _, verdict = fix_verdict(ref, fix, "it", ref_name)
+    real = (f"In reality the policy earns {fix[_real_key('eval_horizon')]:+.3f} per step against "
+            f"{ref[_real_key('eval_horizon')]:+.3f} ("
+            + ("not moved by" if sd["moved"]["real"] == "same" else "moved beyond")
+            + f" the yardstick of {sd['yardstick']:.3f} and the minimum effect) and succeeds {successes(fix)}/{n} "
+            f"times against {successes(ref)}/{n}.")
+    p, _, y, _ = _halves(fix)
+    halves = f"Its gap's halves over the whole evaluation: position {p:+.3f}, yaw {y:+.3f}."
+    nums, ex = expert_words(fix)
+    return f"**{name}**: {verdict} {halves} {real} Expert control ({nums}): {ex}."
+
+
+def fixes_table(state_m: dict, loop_last_m: dict, delta_m: dict, ens_m: dict) -> str:
+    """A markdown table of the three fixes beside the single state model: the gap at both horizons,
+    its position and yaw halves (whole evaluation), the zero-action drift, where the untouched
+    dreamed block ends, the expert signal in the dream and real successes."""
+    runs = [("single model (loop round 0)", state_m), (f"loop, after round {loop_last_m.get('round', '?')}",
+                                                      loop_last_m),
+            ("delta model", delta_m), ("ensemble + penalty", ens_m)]
+    m0 = state_m
+    head = ["run", f"gap, {_short(m0, 'train_horizon')}", f"gap, {_short(m0, 'eval_horizon')}",
+            "position / yaw halves", "yaw share", f"drift (zero actions), {_short(m0, 'eval_horizon')}",
+            "untouched dreamed block from target (m)", "expert signal in the dream", "real successes"]
+    rows = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for name, m in runs:
+        p, pse, y, yse = _halves(m)
+        rows.append("| " + " | ".join([
+            name, _pm(m["imagination_gap_train_horizon"], m["imagination_gap_se_train_horizon"]),
+            _pm(m["imagination_gap_eval_horizon"], m["imagination_gap_se_eval_horizon"]),
+            f"{p:+.3f} / {y:+.3f}", f"{yaw_share(m):.0%}",
+            _pm(m["gap_drift_eval_horizon"], m["gap_drift_se_eval_horizon"]),
+            f"{m['zero_action_dream_final_tee_dist']:.3f}",
+            _pm(m["expert_signal_dream_eval_horizon"], m["expert_signal_dream_se_eval_horizon"]),
+            f"{successes(m)}/{int(m['eval_episodes'])}"]) + " |")
+    rows.append("")
+    rows.append("Reward per step, ± one standard error over the evaluation starts. Yaw share: |yaw half| / "
+                "(|position half| + |yaw half|) of the gap over the whole evaluation. The untouched block: with "
+                f"zero actions, where the dreamed block ends (the walls are {ARENA_HALF:.1f} m from the target; a "
+                "real untouched block stays where it spawned). Expert signal: the scripted expert's actions minus "
+                "zero actions, in the dream.")
+    return "\n".join(rows)
+
+
+def _drift_words(m: dict, k: float) -> str:
+    d, dse = m["gap_drift_eval_horizon"], m["gap_drift_se_eval_horizon"]
+    p, y = m["gap_drift_position_eval_horizon"], m["gap_drift_yaw_eval_horizon"]
+    larger = "yaw" if yaw_half_larger(position=p, yaw=y) else "position"
+    return f"{_pm(d, dse)} per step (position {p:+.3f}, yaw {y:+.3f}: the {larger} half is the larger)"
 
 
 def conclusion(rounds: list, state_m: dict, delta_m: dict, ens_m: dict) -> str:
-    """What each fix bought in each world (gap and real return against the single state model, real
-    successes), and, as open questions, what real success plausibly needs, each tied to a number."""
+    """What each fix bought in each world (whether it counts as a fix, its halves, real return and
+    successes, the expert control), and, as open questions, what real success plausibly needs, each
+    tied to a number and guarded by a claim."""
     first, last = rounds[0], rounds[-1]
     n, R = int(last["eval_episodes"]), last["round"]
     lines = [_fix_line(f"The real-data loop ({R} round{'s' if R != 1 else ''}, "
@@ -664,44 +1132,54 @@ def conclusion(rounds: list, state_m: dict, delta_m: dict, ens_m: dict) -> str:
              _fix_line("Predicting changes", state_m, delta_m, "the state model"),
              _fix_line("An ensemble with a disagreement penalty", state_m, ens_m, "the single model")]
     runs = {"the loop": last, "the delta model": delta_m, "the ensemble": ens_m}
-    won = [name for name, m in runs.items() if successes(m) > 0]
-    if won:
-        lines.append("Real successes appeared with " + ", ".join(f"{w} ({successes(runs[w])}/{n})" for w in won)
-                     + ": one seed and a few starts; rerun other seeds before calling it a fix.")
-    else:
+    if no_real_success(successes=[successes(m) for m in runs.values()]):
         lines.append("**No fix produced a single real success.** Closing a gap is not solving the task: the gap "
                      "can close from the dream's side alone.")
+    else:
+        won = [name for name, m in runs.items() if successes(m) > 0]
+        lines.append("Real successes appeared with " + ", ".join(f"{w} ({successes(runs[w])}/{n})" for w in won)
+                     + ": one seed and a few starts; rerun other seeds before calling it a fix.")
     k = k_for(n)
     open_ = [f"*Data the policy never collects.* The loop corrects the model only where its policy goes: after "
-             f"round {R} the real block still ends {last['real_final_tee_dist']:.3f} m from the target on average "
+             f"round {R} the real block ends {last['real_final_tee_dist']:.3f} m from the target on average "
              f"(a success needs {SUCCESS_POS:.2f} m). The expert's data reach the goal, but by the expert's "
              "actions; the states between, which a better policy would have to pass through with its own "
              "actions, are in neither data set, and nothing corrects the dream there. Exploration aimed at "
              "what the model does not know would plausibly be needed."]
+    nums, ex = expert_words(last)
+    open_.append(f"*A dream that can tell success from standing still.* After round {R}, {nums}: {ex}. An actor "
+                 "trained in a dream can only learn the pushes that dream pays for.")
     tr, tse = last["gap_training_train_horizon"], last["gap_training_se_train_horizon"]
-    if tr > k * tse:
+    kw = dict(value=tr, se=tse, k=k, min_effect=MIN_REWARD_EFFECT)
+    if dream_rosier(**kw):
         open_.append(f"*Reward exploitation.* After round {R} training still makes the dream rosier than reality "
-                     f"over the training horizon by {_pm(tr, tse)} per step, beyond the noise: the actor keeps "
-                     "learning things only the model pays for, and a better actor would find more of them.")
+                     f"over the training horizon by {_pm(tr, tse)} per step, beyond the noise and the minimum "
+                     "effect: the actor keeps learning things only the model pays for, and a better actor would "
+                     "find more of them.")
+    elif dream_gloomier(**kw):
+        open_.append(f"*Reward exploitation* is not what this run shows: after round {R} the gap's training term "
+                     f"over the training horizon is {_pm(tr, tse)}, training made the dream gloomier, not rosier, "
+                     "than reality. A stronger actor, though, searches harder, and every model has errors to find.")
     else:
         open_.append(f"*Reward exploitation.* After round {R} the gap's training term over the training horizon "
-                     f"is {_pm(tr, tse)}, not told apart from zero; but a stronger actor searches harder, and "
-                     "every model has errors to find.")
+                     f"is {_pm(tr, tse)}, not beyond the noise and the minimum effect of {MIN_REWARD_EFFECT:.2f}; "
+                     "but a stronger actor searches harder, and every model has errors to find.")
     dc = metric_change(first, last, "gap_drift_eval_horizon", "gap_drift_se_eval_horizon")
     d0se = first["gap_drift_se_eval_horizon"]
-    causal = (f"*Causal confusion.* With zero actions the round-0 dream is {_pm(dc.first, d0se)} per step against "
-              "reality")
-    if dc.first > k * d0se:
+    causal = f"*Causal confusion.* With zero actions the round-0 dream is {_drift_words(first, k)} against reality"
+    if dream_rosier(value=dc.first, se=d0se, k=k, min_effect=MIN_REWARD_EFFECT):
         causal += (": rosy with a pusher that never moves. In the expert data the block moves only when pushed, "
-                   "and then toward the target; a model can learn \"the block approaches the target\" without "
-                   "the contact that causes it. ")
+                   "and then toward the target's place and angle; a model can learn \"the block approaches the "
+                   "target\" without the contact that causes it. ")
     else:
         causal += ". "
-    causal += (f"After round {R} that drift is {_pm(dc.last, last['gap_drift_se_eval_horizon'])}: "
-               + {"down": "it fell beyond the noise. ", "up": "it rose beyond the noise. ",
-                  "same": "not changed beyond the noise. "}[dc.outcome])
+    d = dc.direction()
+    causal += (f"After round {R} that drift is {_drift_words(last, k)}: "
+               + {"down": "it fell beyond the noise and the minimum effect. ",
+                  "up": "it rose beyond the noise and the minimum effect. ",
+                  "same": "not changed beyond the noise and the minimum effect. "}[d])
     pc, ec = last["wm_policy_one_step_block_copy_err"], last["wm_expert_one_step_block_copy_err"]
-    if dc.outcome == "down" and pc < ec:
+    if d == "down" and pc < ec:
         causal += (f"The policy's data, in which the block moves less (copy-last's one-step block error is "
                    f"{_mm(pc)} on them, {_mm(ec)} on the expert's), may have taught the model otherwise. ")
     causal += ("Whether a model has the cause right is tested only by data where the cause and its usual "
@@ -712,6 +1190,92 @@ def conclusion(rounds: list, state_m: dict, delta_m: dict, ens_m: dict) -> str:
     return "\n\n".join(lines)
 
 
+# --- every seed in this output folder ----------------------------------------------------------------
+def _read_json(path):
+    import json
+
+    return json.loads(path.read_text())
+
+
+def summary_runs(out_dir) -> dict:
+    """Every seed's runs found under ``out_dir``: ``{seed: {"offline": m, "loop": last round,
+    "delta": m, "ensemble": m}}`` (each present only where its file is). The offline run is the
+    loop's round 0 (``metrics/closing/loop_seed<s>/loop.json``) or, without a loop, notebook 04's
+    ``metrics/seed<s>.json``; the loop's entry is its last round; ``delta_seed<s>.json`` and
+    ``ensemble_seed<s>.json`` are notebook 06's two other fixes."""
+    import re
+    from pathlib import Path
+
+    out = Path(out_dir)
+    closing = out / "metrics" / "closing"
+    found: dict = {}
+
+    def put(seed, kind, m):
+        found.setdefault(int(seed), {})[kind] = m
+
+    for path in sorted((out / "metrics").glob("seed*.json")):
+        hit = re.fullmatch(r"seed(\d+)\.json", path.name)
+        if hit:
+            put(hit.group(1), "offline", _read_json(path))
+    for path in sorted(closing.glob("loop_seed*/loop.json")):
+        hit = re.fullmatch(r"loop_seed(\d+)", path.parent.name)
+        rounds = _read_json(path)
+        if hit and rounds:
+            put(hit.group(1), "offline", rounds[0])
+            if len(rounds) > 1:
+                put(hit.group(1), "loop", rounds[-1])
+    for kind in ("delta", "ensemble"):
+        for path in sorted(closing.glob(f"{kind}_seed*.json")):
+            hit = re.fullmatch(rf"{kind}_seed(\d+)\.json", path.name)
+            if hit:
+                put(hit.group(1), kind, _read_json(path))
+    return dict(sorted(found.items()))
+
+
+SUMMARY_KINDS = {"offline": "offline (single model)", "loop": "loop, last round", "delta": "delta model",
+                 "ensemble": "ensemble + penalty"}
+
+
+def summary_table(out_dir) -> str:
+    """One markdown table, per seed and per fix found under ``out_dir`` (:func:`summary_runs`): the
+    gap over the whole evaluation (± SE), the zero-action drift (± SE), the yaw share of the gap,
+    real successes and the expert signal in the dream (± SE); and which seeds it found."""
+    runs = summary_runs(out_dir)
+    if not runs:
+        return (f"No metrics found under `{out_dir}` (notebook 04 writes `metrics/seed<s>.json`, this notebook "
+                "`metrics/closing/`).")
+    head = ["seed", "run", "gap (whole evaluation)", "drift (zero actions)", "yaw share of the gap",
+            "real successes", "expert signal in the dream", "rounds"]
+    rows = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    missing = []
+    for seed, kinds in runs.items():
+        for kind, label in SUMMARY_KINDS.items():
+            m = kinds.get(kind)
+            if m is None:
+                missing.append(f"seed {seed}: {label}")
+                continue
+            share = yaw_share(m)
+            rows.append("| " + " | ".join([
+                str(seed), label,
+                _pm(m["imagination_gap_eval_horizon"], m["imagination_gap_se_eval_horizon"]),
+                _pm(m["gap_drift_eval_horizon"], m["gap_drift_se_eval_horizon"]),
+                "n/a" if math.isnan(share) else f"{share:.0%}",
+                f"{successes(m)}/{int(m['eval_episodes'])}",
+                _pm(m["expert_signal_dream_eval_horizon"], m["expert_signal_dream_se_eval_horizon"]),
+                str(m.get("round", "")) if kind == "loop" else ""]) + " |")
+    seeds = list(runs)
+    text = [f"Seeds found under `{out_dir}`: {', '.join(str(s) for s in seeds)} ({len(seeds)} seed"
+            f"{'s' if len(seeds) != 1 else ''}).", "", *rows, "",
+            "Reward per step over the whole evaluation, ± one standard error over the evaluation starts. Gap: "
+            "imagined minus real; drift: the same with zero actions (the model on its own); yaw share: |yaw "
+            "half| / (|position half| + |yaw half|) of the gap; expert signal: the scripted expert's actions "
+            "minus zero actions, in the dream (a dream that recognises success pays the expert's pushes more "
+            "than standing still)."]
+    if missing:
+        text.append("Not found (that notebook or seed was not run into this folder): " + "; ".join(missing) + ".")
+    return "\n".join(text)
+
+
 # --- figures --------------------------------------------------------------------------------------
 def _round_axis(ax, rounds):
     r = [m["round"] for m in rounds]
@@ -720,40 +1284,54 @@ def _round_axis(ax, rounds):
     ax.set_xlim(min(r) - 0.4, max(r) + 0.4)
 
 
+def _legend_below(ax, ncol=2, y=-0.2):
+    """A legend under the axes (its top ``y`` axes-heights below them), so it never covers a curve."""
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, y), ncol=ncol, frameon=False)
+
+
 @figure
 def fig_rounds(rounds: list):
     """Left: the gap per round over the training horizon and over the whole evaluation, ± one
-    standard error over the starts. Right: the dream's and reality's rating per round (whole
-    evaluation), with each round's real successes."""
+    standard error over the starts. Middle: the gap's position and yaw halves per round (whole
+    evaluation). Right: the dream's and reality's rating per round (whole evaluation), with each
+    round's real successes under its round number. Legends sit under the axes."""
     import matplotlib.pyplot as plt
 
     x = np.array([m["round"] for m in rounds], dtype=float)
     last = rounds[-1]
-    fig, axes = plt.subplots(1, 2, figsize=(13, 4.4))
+    fig, axes = plt.subplots(1, 3, figsize=(17, 5.2))
     ax = axes[0]
     for dx, span, color in ((-0.06, "train_horizon", "tab:cyan"), (0.06, "eval_horizon", "k")):
         g = _series(rounds, f"imagination_gap_{span}")
         se = _series(rounds, f"imagination_gap_se_{span}")
         ax.errorbar(x + dx, g, yerr=se, fmt="o-", color=color, capsize=4, lw=1.5,
-                    label=f"over {_steps(last, span)} (± 1 standard error)")
+                    label=f"over {_steps(last, span)}")
     ax.axhline(0, color="gray", lw=1, ls="--", label="dream = reality")
-    ax.set_ylabel("imagination gap\n(imagined minus real reward per step)")
+    ax.set_ylabel("imagination gap (imagined minus real\nreward per step; bars: ± 1 standard error)")
     ax.set_title("The gap, round by round")
-    ax.legend(fontsize=8, loc="best")
     _round_axis(ax, rounds)
+    _legend_below(ax)
     ax = axes[1]
-    ax.plot(x, _series(rounds, "imagined_return_per_step"), "o-", color=WORLD_COLORS["dream"], lw=2,
+    for dx, part, color in ((-0.06, "position", "tab:blue"), (0.06, "yaw", "tab:red")):
+        g = _series(rounds, f"imagination_gap_{part}_eval_horizon")
+        se = _series(rounds, f"imagination_gap_se_{part}_eval_horizon")
+        ax.errorbar(x + dx, g, yerr=se, fmt="o-", color=color, capsize=4, lw=1.5,
+                    label=f"{part} half" + (" (the block's angle)" if part == "yaw" else " (its distance)"))
+    ax.axhline(0, color="gray", lw=1, ls="--")
+    ax.set_ylabel("part of the gap (reward per step;\nbars: ± 1 standard error)")
+    ax.set_title(f"The gap's two halves ({_steps(last, 'eval_horizon')})")
+    _round_axis(ax, rounds)
+    _legend_below(ax)
+    ax = axes[2]
+    ax.plot(x, _series(rounds, _dream_key("eval_horizon")), "o-", color=WORLD_COLORS["dream"], lw=2,
             label="in the dream")
-    real = _series(rounds, "real_return_per_step")
-    ax.plot(x, real, "s-", color=WORLD_COLORS["real"], lw=2, label="in reality")
-    for xi, yi, m in zip(x, real, rounds):
-        ax.annotate(f"{successes(m)}/{m['eval_episodes']} solved", (xi, yi), textcoords="offset points",
-                    xytext=(0, -14), ha="center", va="top", fontsize=8, color=WORLD_COLORS["real"])
-    ax.margins(y=0.2)                                      # room for the success labels
+    ax.plot(x, _series(rounds, _real_key("eval_horizon")), "s-", color=WORLD_COLORS["real"], lw=2, label="in reality")
     ax.set_ylabel("mean reward per step\n(0 = block on target)")
     ax.set_title(f"The two ratings the gap is the difference of ({_steps(last, 'eval_horizon')})")
-    ax.legend(fontsize=8, loc="best")
     _round_axis(ax, rounds)
+    ax.set_xticks(x, [f"{int(r)}\n{successes(m)}/{m['eval_episodes']} solved" for r, m in zip(x, rounds)])
+    ax.set_xlabel("loop round (0 = the offline chapter run), real successes under each")
+    _legend_below(ax)
     fig.suptitle("Dreamer's real-data loop: collect with the policy, train the model on everything, dream again")
     fig.tight_layout()
     return fig
@@ -783,9 +1361,10 @@ def fig_model_error(rounds: list):
             ax.set_ylabel(f"{part} position RMSE (m)")
             ax.set_title(f"{'One step ahead' if kind == 'one_step' else 'Open loop (the dream alone)'}: {part}")
             _round_axis(ax, rounds)
-    axes[0, 0].legend(fontsize=8, loc="best")
+    handles, names = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, names, fontsize=8, loc="lower center", ncol=4, frameon=False)
     fig.suptitle("The world model's error, round by round: on the policy's data (red) and the expert's (blue)")
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.05, 1, 1))
     return fig
 
 
@@ -798,7 +1377,7 @@ def fig_block(rounds: list):
 
     x = np.array([m["round"] for m in rounds], dtype=float)
     n = rounds[-1]["eval_episodes"]
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.8))
     ax = axes[0]
     ax.bar(x, _series(rounds, "real_episodes_touching_block"), 0.6, color="tab:green", alpha=0.8)
     ax.set_ylim(0, n)
@@ -813,7 +1392,7 @@ def fig_block(rounds: list):
     ax.set_ylim(0, None)
     ax.set_ylabel("block displacement, spawn to end (m)")
     ax.set_title("How far the block moves")
-    ax.legend(fontsize=8, loc="best")
+    _legend_below(ax)
     _round_axis(ax, rounds)
     ax = axes[2]
     ax.errorbar(x, _series(rounds, "real_block_toward_target"), yerr=[toward_se_bound(m) for m in rounds],
@@ -821,7 +1400,7 @@ def fig_block(rounds: list):
     ax.axhline(0, color="gray", ls="--", lw=1, label="ends as far as it spawned")
     ax.set_ylabel("spawn distance minus final distance\nto the target (m; > 0 = closer)")
     ax.set_title("Does it move toward the target?")
-    ax.legend(fontsize=8, loc="best")
+    _legend_below(ax)
     _round_axis(ax, rounds)
     fig.suptitle(f"The real block under each round's policy ({n} evaluation starts)")
     fig.tight_layout()
@@ -843,29 +1422,39 @@ def fig_fixes(state_m: dict, loop_last_m: dict, delta_m: dict, ens_m: dict, labe
         raise ValueError(f"need {len(runs)} labels, got {len(labels)}")
     colors = ["tab:gray", "tab:green", "tab:blue", "tab:purple"]
     x = np.arange(len(runs), dtype=float)
-    fig, axes = plt.subplots(1, 3, figsize=(16, 4.6))
+    fig, axes = plt.subplots(1, 4, figsize=(21, 5.4))
     for ax, span in zip(axes[:2], SPAN_KEYS):
         g = [m[f"imagination_gap_{span}"] for m in runs]
         se = [m[f"imagination_gap_se_{span}"] for m in runs]
-        ax.bar(x, g, 0.6, yerr=se, capsize=5, color=colors, alpha=0.85, label="gap ± 1 standard error")
+        ax.bar(x, g, 0.6, yerr=se, capsize=5, color=colors, alpha=0.85)
         ax.axhline(0, color="k", lw=0.8)
         ax.set_xticks(x, labels, fontsize=8)
         ax.set_xlabel("run")
-        ax.set_ylabel("imagination gap\n(imagined minus real reward per step)")
+        ax.set_ylabel("imagination gap (imagined minus real reward\nper step; bars: ± 1 standard error)")
         ax.set_title(f"The gap over {_steps(state_m, span)}")
-        ax.legend(fontsize=8, loc="best")
     ax = axes[2]
-    for dx, world, key in ((-0.18, "dream", "imagined_return_per_step"), (0.18, "real", "real_return_per_step")):
+    for dx, part, color in ((-0.18, "position", "tab:blue"), (0.18, "yaw", "tab:red")):
+        g = [m[f"imagination_gap_{part}_eval_horizon"] for m in runs]
+        se = [m[f"imagination_gap_se_{part}_eval_horizon"] for m in runs]
+        ax.bar(x + dx, g, 0.36, yerr=se, capsize=4, color=color, alpha=0.8,
+               label=f"{part} half" + (" (the block's angle)" if part == "yaw" else " (its distance)"))
+    ax.axhline(0, color="k", lw=0.8)
+    ax.set_xticks(x, labels, fontsize=8)
+    ax.set_xlabel("run")
+    ax.set_ylabel("part of the gap (reward per step;\nbars: ± 1 standard error)")
+    ax.set_title(f"The gap's two halves ({_steps(state_m, 'eval_horizon')})")
+    _legend_below(ax, y=-0.3)
+    ax = axes[3]
+    for dx, world, key in ((-0.18, "dream", _dream_key("eval_horizon")), (0.18, "real", _real_key("eval_horizon"))):
         ax.bar(x + dx, [m[key] for m in runs], 0.36, color=WORLD_COLORS[world], alpha=0.85,
                label="in the dream" if world == "dream" else "in reality")
     ax.axhline(0, color="k", lw=0.8)
     ax.set_xticks(x, [f"{lab}\n{successes(m)}/{m['eval_episodes']} solved" for lab, m in zip(labels, runs)],
                   fontsize=8)
-    ax.margins(y=0.25)                                     # room for the legend below the bars
     ax.set_xlabel("run (real successes under each name)")
     ax.set_ylabel("mean reward per step\n(0 = block on target)")
     ax.set_title(f"Both worlds' ratings ({_steps(state_m, 'eval_horizon')})")
-    ax.legend(fontsize=8, loc="lower right")
+    _legend_below(ax, y=-0.36)
     fig.suptitle("Three fixes against the chapter's single state model, on the same evaluation starts")
     fig.tight_layout()
     return fig
@@ -874,16 +1463,17 @@ def fig_fixes(state_m: dict, loop_last_m: dict, delta_m: dict, ens_m: dict, labe
 # --- self-checks ----------------------------------------------------------------------------------
 SELF_CHECKS = {
     "dream_side": Question(
-        "Round after round, the loop's world model gets more accurate on the policy's own data, and the gap "
-        "shrinks; yet the policy may earn no more in reality than before. How can both be true?",
+        "Suppose a loop's world model gets more accurate on the policy's own data and the gap shrinks, yet the "
+        "policy earns no more in reality than before. How can both be true? (Whether that is what happened on "
+        "your run, the numbers above say; this is about what is possible.)",
         {"a": "They cannot: a more accurate model always yields a better policy",
          "b": "Trained on what this policy's actions really do, the model stops promising what they do not "
               "deliver: the dream's rating comes down to reality's. The gap is a difference, and it closes just "
               "as well when only the dream moves",
          "c": "The gap is measured on new evaluation starts each round, so the rounds cannot be compared"},
-        "b", "The gap is imagined minus real return. Fitting the model to the policy's data fixes the imagined "
-             "side for this policy; nothing in that makes the real side rise. Read both ratings, not only their "
-             "difference."),
+        "b", "The gap is imagined minus real return. Fitting the model to the policy's data can correct the "
+             "imagined side for this policy; nothing in that by itself makes the real side rise. Read both "
+             "ratings, not only their difference."),
     "shared_bias": Question(
         "Three world models are trained on the same data, each from its own initial weights and batch order. "
         "Why can they agree closely with each other and still all be wrong about the policy's real data?",
@@ -897,8 +1487,9 @@ SELF_CHECKS = {
              "is shared, and a penalty on their spread cannot see it. The penalty shapes the actor, not the "
              "members."),
     "delta_runaway": Question(
-        "A world model that predicts the change from one frame to the next beats copy-last one step ahead on "
-        "every dimension, yet its 100-step dream runs metres away. How?",
+        "Suppose a world model that predicts the change from one frame to the next beats copy-last one step ahead "
+        "on every dimension, yet its 100-step dream runs far off, even off the table. How can both be true? "
+        "(Whether your delta model did either, the sentence above says.)",
         {"a": "One step ahead, each prediction starts from the true previous frame; in a dream each step adds its "
               "small error to the sum of all the earlier ones, with no true frame to pull it back, and training "
               "on 16-step clips never penalised what 100 accumulated steps do",

@@ -13,16 +13,188 @@ import numpy as np
 from ..env import SUCCESS_ANG, SUCCESS_POS, obs_to_pose
 from ..selfcheck import Question
 from . import figure
+from .claims import claim, finite
+from .stats import MIN_REWARD_EFFECT
 
 K_SE = 2.0
 # 5 mm: the smallest distance difference these sentences read as a difference (a sixth of the
 # pusher's radius; the per-start spread of final distances is several centimetres).
 NEAR = 0.005
+# 10 degrees, the environment's yaw tolerance: the smallest yaw difference read as a difference.
+NEAR_DEG = float(np.degrees(SUCCESS_ANG))
 COLORS = {"dream": "tab:purple", "real": "tab:orange"}
 POLICY_LABELS = {"zero": "zero actions", "untrained": "untrained actor", "trained": "trained actor"}
 TERMS = {"drift": "drift (zero actions)", "motion": "untrained actor's motion",
-         "training": "training (exploitation)"}
+         "training": "training"}
 SPANS = {"train_horizon": "training horizon", "eval_horizon": "whole evaluation"}
+HALVES = ("position", "yaw")
+TEST_WORDS = (f"beyond {K_SE:g} standard errors over the starts and at least the minimum effect that "
+              f"matters, {MIN_REWARD_EFFECT:.2f} per step")
+
+
+# --- the claims this notebook makes about the learner's run -------------------------------------
+# Each is a named predicate (pusht.nb.claims): the sentence it guards is printed only when it holds,
+# and its true alternative otherwise. A reward-per-step difference counts when it is beyond K_SE
+# standard errors (measured on the same starts) AND at least MIN_REWARD_EFFECT.
+def _beyond(value, se, k, min_effect) -> bool:
+    return finite(value, se, k, min_effect) and value > k * se and value >= min_effect and value > 0
+
+
+@claim("04.term_positive", "a term of the gap is clearly positive: beyond k standard errors and the "
+       "minimum effect that matters")
+def term_positive(*, value, se, k, min_effect, what=""):
+    return _beyond(value, se, k, min_effect)
+
+
+@claim("04.term_negative", "a term of the gap is clearly negative: beyond k standard errors and the "
+       "minimum effect that matters")
+def term_negative(*, value, se, k, min_effect, what=""):
+    return _beyond(-value, se, k, min_effect)
+
+
+@claim("04.real_success", "the trained policy solved at least one real start on some seed")
+def real_success(*, success_rates):
+    return any(r > 0 for r in success_rates)
+
+
+@claim("04.gap_rosy", "the dream rates the trained policy well above reality (the whole evaluation's "
+       "gap beyond k standard errors and the minimum effect)")
+def gap_rosy(*, gap, se, k, min_effect):
+    return _beyond(gap, se, k, min_effect)
+
+
+@claim("04.drift_half_of_gap", "zero actions are already rated well above reality by the dream, by "
+       "at least half of the trained policy's gap")
+def drift_half_of_gap(*, drift, se, gap, k, min_effect):
+    return _beyond(drift, se, k, min_effect) and drift >= 0.5 * gap
+
+
+@claim("04.drift_half_on_means", "averaged over the seeds, the drift is at least half of the gap")
+def drift_half_on_means(*, drifts, gaps):
+    return float(np.mean(drifts)) >= 0.5 * float(np.mean(gaps))
+
+
+@claim("04.dream_reproduces_package", "the learner's dream gives the package's imagined reward "
+       "to within 1e-5 per step")
+def dream_reproduces_package(*, mismatch):
+    return finite(mismatch) and mismatch < 1e-5
+
+
+@claim("04.training_exploits", "within the actor's training horizon, training made the dream rosier "
+       "than it made reality, beyond k standard errors and the minimum effect: exploitation")
+def training_exploits(*, value, se, k, min_effect):
+    return _beyond(value, se, k, min_effect)
+
+
+@claim("04.training_exploits_eval", "over the whole evaluation, training made the dream rosier than "
+       "it made reality, beyond k standard errors and the minimum effect")
+def training_exploits_eval(*, value, se, k, min_effect):
+    return _beyond(value, se, k, min_effect)
+
+
+@claim("04.drift_rosy", "with the pusher standing still, the dream is rosier than reality within "
+       "the training horizon, beyond k standard errors and the minimum effect")
+def drift_rosy(*, value, se, k, min_effect):
+    return _beyond(value, se, k, min_effect)
+
+
+@claim("04.half_dominates", "the named half of the gap is positive and larger than the other half "
+       "by more than k standard errors of their difference and the minimum effect")
+def half_dominates(*, larger, smaller, se_diff, k, min_effect, which=""):
+    return larger > 0 and _beyond(larger - smaller, se_diff, k, min_effect)
+
+
+@claim("04.term_beyond_noise", "a term of the gap is beyond k standard errors from zero (whatever its size)")
+def term_beyond_noise(*, value, se, k, what=""):
+    return finite(value, se, k) and abs(value) > k * se and value != 0
+
+
+@claim("04.dream_block_drifts_back", "the trained dream's block comes nearest inside the training "
+       "horizon, then ends more than 5 mm farther out")
+def dream_block_drifts_back(*, t_min, horizon_s, d_min, d_end, near):
+    return t_min <= horizon_s and d_end > d_min + near
+
+
+@claim("04.zero_dream_closer", "the zero-action dream gets the block nearer the target (by over 5 mm) "
+       "than the trained actor's dream ever does")
+def zero_dream_closer(*, zero_min, trained_min, near):
+    return zero_min < trained_min - near
+
+
+@claim("04.dream_drifts_to_data_position", "with zero actions, the dreamed block ends nearer the "
+       "expert data's mean block position than the real (unmoved) block is, by over 5 mm")
+def dream_drifts_to_data_position(*, dream_to_mean, real_to_mean, near):
+    return dream_to_mean < real_to_mean - near
+
+
+@claim("04.dream_drifts_to_data_yaw", "with zero actions, the dreamed block's yaw ends nearer the "
+       "expert data's mean yaw than the real (unmoved) block's, by over 10 degrees")
+def dream_drifts_to_data_yaw(*, dream_to_mean_deg, real_to_mean_deg, near_deg):
+    return dream_to_mean_deg < real_to_mean_deg - near_deg
+
+
+@claim("04.typical_pose_near_target", "the expert data's mean block pose is less than half as far "
+       "from the target as the spawned blocks, in distance and in yaw")
+def typical_pose_near_target(*, typical_dist, typical_yaw_deg, spawn_dist, spawn_yaw_deg):
+    return typical_dist < 0.5 * spawn_dist and typical_yaw_deg < 0.5 * spawn_yaw_deg
+
+
+@claim("04.reality_pays_expert", "reality pays the scripted expert's pushes more than standing still, "
+       "beyond k standard errors and the minimum effect")
+def reality_pays_expert(*, value, se, k, min_effect):
+    return _beyond(value, se, k, min_effect)
+
+
+@claim("04.expert_solves_most", "the scripted expert solves at least half of the starts in reality")
+def expert_solves_most(*, success_rate):
+    return success_rate >= 0.5
+
+
+@claim("04.dream_pays_expert", "the dream pays the scripted expert's pushes more than standing still, "
+       "beyond k standard errors and the minimum effect: a learnable signal existed")
+def dream_pays_expert(*, value, se, k, min_effect):
+    return _beyond(value, se, k, min_effect)
+
+
+@claim("04.dream_penalises_expert", "the dream pays the scripted expert's pushes less than standing "
+       "still, beyond k standard errors and the minimum effect")
+def dream_penalises_expert(*, value, se, k, min_effect):
+    return _beyond(-value, se, k, min_effect)
+
+
+@claim("04.real_beats_zero", "in reality the trained policy earns more per step than zero actions, "
+       "beyond k standard errors and the minimum effect")
+def real_beats_zero(*, diff, se, k, min_effect):
+    return _beyond(diff, se, k, min_effect)
+
+
+@claim("04.real_worse_than_zero", "in reality the trained policy earns less per step than zero "
+       "actions, beyond k standard errors and the minimum effect")
+def real_worse_than_zero(*, diff, se, k, min_effect):
+    return _beyond(-diff, se, k, min_effect)
+
+
+@claim("04.pusher_tracked_worse", "replaying the policy's real actions, the model's pusher is more "
+       "than 5 mm farther off than on held-out expert clips")
+def pusher_tracked_worse(*, policy_err, expert_err, near):
+    return policy_err > expert_err + near
+
+
+@claim("04.dream_ends_collapse", "the dreamed blocks' end points are less spread than the real ones', "
+       "by more than 5 mm")
+def dream_ends_collapse(*, dream_spread, real_spread, near):
+    return dream_spread < real_spread - near
+
+
+@claim("04.drift_most_every_seed", "on every seed compared, the drift is at least half of the gap")
+def drift_most_every_seed(*, drifts, gaps):
+    return all(d >= 0.5 * g for d, g in zip(drifts, gaps))
+
+
+def _term_args(m: dict, key: str, span: str, half: str = "") -> tuple[float, float]:
+    """(value, se) of ``key`` ("imagination_gap" or "gap_<term>") over ``span``, for a half or all."""
+    tag = f"_{half}" if half else ""
+    return m[f"{key}{tag}_{span}"], m[f"{key}_se{tag}_{span}"]
 
 
 # --- Exercise 1 ---------------------------------------------------------------------------------
@@ -39,27 +211,33 @@ EX1_OPTIONS = {
 
 
 def clearly_positive(value: float, se: float, k: float = K_SE) -> bool:
-    """``value`` exceeds ``k`` standard errors (``se`` measured on the same starts)."""
-    return bool(value > k * se)
+    """``value`` exceeds ``k`` standard errors (``se`` measured on the same starts) and the minimum
+    effect that matters (a registered claim, ``04.term_positive``)."""
+    return term_positive(value=value, se=se, k=k, min_effect=MIN_REWARD_EFFECT)
 
 
 def ex1_verdict(metrics: list[dict]) -> str:
     """Exercise 1's measured outcome (a letter of ``EX1_OPTIONS``) from each seed's evaluation
-    metrics (``two_world_eval`` with ``train_horizon``). Decided on the whole evaluation, the
-    deployed 10 s that the question is about; "well above" means beyond ``K_SE`` standard errors
-    of the per-start gaps; a mixed result across seeds is decided on the seeds' means."""
-    if any(m["real_success_rate"] > 0 for m in metrics):
+    metrics (``two_world_eval`` with ``train_horizon``), decided by registered claims. Decided on
+    the whole evaluation, the deployed 10 s that the question is about; "well above" means beyond
+    ``K_SE`` standard errors of the per-start gaps and at least ``MIN_REWARD_EFFECT``; a mixed
+    result across seeds is decided on the seeds' means."""
+    if real_success(success_rates=[m["real_success_rate"] for m in metrics]):
         return "a"
-    if not all(clearly_positive(m["imagination_gap"], m["imagination_gap_se_eval_horizon"]) for m in metrics):
+    if not all([gap_rosy(gap=m["imagination_gap"], se=m["imagination_gap_se_eval_horizon"], k=K_SE,
+                         min_effect=MIN_REWARD_EFFECT) for m in metrics]):
         return "d"
-    zero_rosy = [clearly_positive(m["gap_drift_eval_horizon"], m["gap_drift_se_eval_horizon"])
-                 and m["gap_drift_eval_horizon"] >= 0.5 * m["imagination_gap"] for m in metrics]
+    zero_rosy = [drift_half_of_gap(drift=m["gap_drift_eval_horizon"], se=m["gap_drift_se_eval_horizon"],
+                                   gap=m["imagination_gap"], k=K_SE, min_effect=MIN_REWARD_EFFECT)
+                 for m in metrics]
+    # evaluated on every run (so the claim is recorded), though it decides only a mixed result
+    on_means = drift_half_on_means(drifts=[m["gap_drift_eval_horizon"] for m in metrics],
+                                   gaps=[m["imagination_gap"] for m in metrics])
     if all(zero_rosy):
         return "c"
     if not any(zero_rosy):
         return "b"
-    drift = np.mean([m["gap_drift_eval_horizon"] for m in metrics])
-    return "c" if drift >= 0.5 * np.mean([m["imagination_gap"] for m in metrics]) else "b"
+    return "c" if on_means else "b"
 
 
 def ex1_sentence(seed: int, m: dict, n_eval: int) -> str:
@@ -70,48 +248,193 @@ def ex1_sentence(seed: int, m: dict, n_eval: int) -> str:
             f"{round(m['real_success_rate'] * n_eval)}/{n_eval} real successes.")
 
 
+def ex1_note() -> str:
+    """What the ± and "well above" of the reconciliation mean."""
+    return (f"(± is one standard error over the starts; 'well above' means {TEST_WORDS}.)")
+
+
+def dream_check_text(mismatch: float) -> str:
+    """Does the learner's ``dream`` reproduce the package's imagined reward?"""
+    if dream_reproduces_package(mismatch=mismatch):
+        return f"Your `dream` reproduces the package's imagined reward per step to within **{mismatch:.1e}**."
+    return (f"**Careful:** your `dream` gives imagined rewards that differ from the package's by {mismatch:.3g} "
+            "per step; the figures below use yours, so re-check the task above.")
+
+
+def exploitation_text(metrics: dict, H: int) -> str:
+    """After the reconciliation: what each seed's run shows about the question "what has the actor
+    become good at": the training term within the ``H`` steps its gradient saw (a claim)."""
+    lines = []
+    for seed, m in metrics.items():
+        v, se = m["gap_training_train_horizon"], m["gap_training_se_train_horizon"]
+        if training_exploits(value=v, se=se, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+            verdict = ("training made the dream rosier than it made reality: the actor learned something "
+                       "only the dream pays for")
+        else:
+            verdict = ("training did not make the dream measurably rosier than reality: this actor did not "
+                       "measurably exploit its dream")
+        lines.append(f"* seed {seed}: within the first {H} steps, training's part of the gap is "
+                     f"**{v:+.3f}** ± {se:.3f} per step; {verdict}.")
+    return ("**What your run shows.** Whether the actor exploited its dream is measured by the *training* "
+            "term of the gap (taken apart below): what training added in the dream beyond what it added in "
+            f"reality, over the {H} steps the actor's gradient saw. It counts when it is {TEST_WORDS}.\n\n"
+            + "\n".join(lines))
+
+
+# --- the headline and one start ------------------------------------------------------------------
+def headline_text(m: dict, n_dream_solved: int, n_real_solved: int, n_eval: int, page: dict | None = None) -> str:
+    """The two-worlds headline in words (and the chapter page's numbers, quoted, when given)."""
+    s = (f"In the dream the policy earns **{m['imagined_return_per_step']:+.3f}** per step; in reality "
+         f"**{m['real_return_per_step']:+.3f}**, a gap of **{m['imagination_gap']:+.3f}**. The dream leaves "
+         f"the block **{m['imagined_final_tee_dist']:.3f} m** from the target on average, with a yaw error of "
+         f"**{m['trained_dream_final_yaw_err_deg']:.0f}°**, and by the environment's own thresholds it would "
+         f"call **{n_dream_solved}/{n_eval}** starts solved. In reality the block ends **{m['real_final_tee_dist']:.3f} m** "
+         f"away with a yaw error of **{m['trained_real_final_yaw_err_deg']:.0f}°** (it spawned "
+         f"**{m['spawn_tee_dist']:.3f} m** away), and **{n_real_solved}/{n_eval}** starts are solved.")
+    if page:
+        s += (f"\n\nFor comparison, the chapter page reports for its seed 0 an imagined "
+              f"{page['imagined_return_per_step']['seed0']:+.3f} against a real {page['real_return_per_step']['seed0']:+.3f} "
+              f"per step (gap {page['imagination_gap']['seed0']:+.3f}), a dream block "
+              f"{page['imagined_final_tee_dist']['seed0']:.3f} m from the target and a real one "
+              f"{page['real_final_tee_dist']['seed0']:.3f} m away, with {page['real_success_rate']['seed0']:.0%} real "
+              "success. Those are the page's own numbers, quoted: not reproduced by this notebook.")
+    return s
+
+
+def median_start(dream_roll, real_roll) -> int:
+    """The start whose dream-minus-real final distance is the median one: a typical start."""
+    d = dream_roll.final_tee_dist - real_roll.final_tee_dist
+    return int(np.argsort(d)[len(d) // 2])
+
+
+def median_start_text(i: int, dream_roll, real_roll) -> str:
+    """Where start ``i`` ends in both worlds: distance and yaw error, against where it spawned."""
+    _, tee0 = obs_to_pose(real_roll.obs[0, i])
+    return (f"Start {i} (the median start): the dream ends with the block **{dream_roll.final_tee_dist[i]:.3f} m** "
+            f"from the target at a yaw error of **{dream_roll.final_yaw_err[i]:.0f}°**; reality ends with it "
+            f"**{real_roll.final_tee_dist[i]:.3f} m** away at **{real_roll.final_yaw_err[i]:.0f}°** (it spawned "
+            f"{np.linalg.norm(tee0[:2]):.3f} m away at {abs(np.degrees(tee0[2])):.0f}°).")
+
+
 # --- reading the split of the gap ----------------------------------------------------------------
-def describe(value: float, se: float) -> str:
-    """A term in words, judged against its own standard error."""
-    if value > K_SE * se:
+def describe(value: float, se: float, what: str = "") -> str:
+    """A term in words, judged against its own standard error and the minimum effect that matters
+    (registered claims ``04.term_positive`` and ``04.term_negative``)."""
+    if term_positive(value=value, se=se, k=K_SE, min_effect=MIN_REWARD_EFFECT, what=what):
         return "clearly positive"
-    if value < -K_SE * se:
+    if term_negative(value=value, se=se, k=K_SE, min_effect=MIN_REWARD_EFFECT, what=what):
         return "clearly negative"
+    if term_beyond_noise(value=value, se=se, k=K_SE, what=what):
+        return "beyond the noise but smaller than the minimum effect that matters"
     return "not told apart from zero"
 
 
-def split_sentence(m: dict, span: str, steps: int) -> str:
-    """The gap and its three terms over ``span`` ("train_horizon" or "eval_horizon")."""
+def half_difference_se(rollouts: dict, steps: int | None) -> float:
+    """The standard error over the starts of the gap's yaw half minus its position half, over the
+    first ``steps`` steps (all for None): both halves are measured on the same starts, so the
+    difference is a mean of per-start differences."""
+    from ..analysis import _per_start, _se
+
+    def half(part):
+        return _per_start(rollouts["dream_trained"], steps, part) - _per_start(rollouts["real_trained"], steps, part)
+
+    x = half("yaw") - half("position")
+    return _se(x[~np.isnan(x)])
+
+
+def dominant_half(m: dict, span: str, se_diff: float | None = None) -> str | None:
+    """"position" or "yaw" when that half of the gap over ``span`` is positive and the larger one by
+    more than K_SE standard errors of the two halves' difference, ``se_diff`` (per start,
+    :func:`half_difference_se`; without it, the sum of the halves' own standard errors, a
+    conservative bound), and the minimum effect; None when neither is (claim ``04.half_dominates``)."""
+    (p, pse), (y, yse) = (_term_args(m, "imagination_gap", span, h) for h in HALVES)
+    se = pse + yse if se_diff is None else se_diff
+    for which, a, b in (("yaw", y, p), ("position", p, y)):
+        if a >= b and half_dominates(larger=a, smaller=b, se_diff=se, k=K_SE, min_effect=MIN_REWARD_EFFECT,
+                                     which=f"{span} {which}"):
+            return which
+    return None
+
+
+def dominance_sentence(m: dict, span: str, se_diff: float | None = None) -> str:
+    """Which half of the gap is the larger on this run, in words."""
+    (p, _), (y, _) = (_term_args(m, "imagination_gap", span, h) for h in HALVES)
+    which = dominant_half(m, span, se_diff)
+    name = "gap"
+    noise = (f"{se_diff:.3f}, its standard error over the starts" if se_diff is not None else
+             "the sum of the halves' standard errors, a conservative bound")
+    total = m[f"imagination_gap_{span}"]
+    shares = (f", that is {p / total:.0%} and {y / total:.0%} of the {name}"
+              if p > 0 and y > 0 and total > 0 else "")
+    if which is None:
+        return (f"Neither half of the {name} stands out as the larger, positive part (position {p:+.3f}, yaw "
+                f"{y:+.3f}{shares}; their difference is not beyond {K_SE:g} times {noise}, or is below the "
+                f"minimum effect {MIN_REWARD_EFFECT:.2f}).")
+    other = "position" if which == "yaw" else "yaw"
+    a, b = (y, p) if which == "yaw" else (p, y)
+    what = "the block's *orientation* (its yaw)" if which == "yaw" else "the block's *position*"
+    return (f"Most of the {name} is in its **{which}** half: {a:+.3f} against {b:+.3f} from {other} "
+            f"(the difference is beyond {K_SE:g} times {noise}, and at least {MIN_REWARD_EFFECT:.2f}): "
+            f"on this run the dream flatters {what} more than its {other}.")
+
+
+def split_sentence(m: dict, span: str, steps: int, rollouts: dict | None = None) -> str:
+    """The gap and its three terms over ``span`` ("train_horizon" or "eval_horizon"), each with
+    its position and yaw halves, and which half of the gap is the larger (judged on the per-start
+    difference of the halves when the run's ``rollouts`` are given)."""
     gap, gse = m[f"imagination_gap_{span}"], m[f"imagination_gap_se_{span}"]
+    rosy = gap_rosy(gap=gap, se=gse, k=K_SE, min_effect=MIN_REWARD_EFFECT)
+
+    def halves(key):
+        (p, _), (y, _) = (_term_args(m, key, span, h) for h in HALVES)
+        return f"position {p:+.3f}, yaw {y:+.3f}"
+
     parts = []
     for term, label in TERMS.items():
         v, se = m[f"gap_{term}_{span}"], m[f"gap_{term}_se_{span}"]
-        share = f", {v / gap:.0%} of the gap" if gap > K_SE * gse else ""
-        parts.append(f"{label} **{v:+.3f}** ± {se:.3f} ({describe(v, se)}{share})")
-    return (f"Over the first **{steps} steps** ({SPANS[span]}) the gap is **{gap:+.3f}** ± {gse:.3f} per step: "
-            + "; ".join(parts) + ".")
+        share = f", {v / gap:.0%} of the gap" if rosy else ""
+        parts.append(f"{label} **{v:+.3f}** ± {se:.3f} ({halves(f'gap_{term}')}; {describe(v, se, f'{term} {span}')}{share})")
+    return (f"Over the first **{steps} steps** ({SPANS[span]}) the gap is **{gap:+.3f}** ± {gse:.3f} per step "
+            f"({halves('imagination_gap')}): " + "; ".join(parts) + ". "
+            + dominance_sentence(m, span, None if rollouts is None else half_difference_se(
+                rollouts, steps if span == "train_horizon" else None)))
 
 
 def split_story(m: dict, H: int) -> str:
-    """What the two horizons say together about drift and exploitation."""
+    """What the two horizons say together about drift and exploitation (registered claims)."""
     tr_h, tr_e = m["gap_training_train_horizon"], m["gap_training_eval_horizon"]
     se_h, se_e = m["gap_training_se_train_horizon"], m["gap_training_se_eval_horizon"]
-    drift_h = m["gap_drift_train_horizon"]
+    drift_h, drift_se = m["gap_drift_train_horizon"], m["gap_drift_se_train_horizon"]
     s = ""
-    if clearly_positive(tr_h, se_h):
+    exploits_h = training_exploits(value=tr_h, se=se_h, k=K_SE, min_effect=MIN_REWARD_EFFECT)
+    if exploits_h:
         gap_h = m["imagination_gap_train_horizon"]
         share = f", {tr_h / gap_h:.0%} of the gap over those steps" if gap_h > 0 else ""
         s += (f"Within the {H} steps its gradient saw, training made the dream rosier than it made reality "
-              f"by {tr_h:+.3f} per step (beyond twice its standard error{share}): that part the actor "
+              f"by {tr_h:+.3f} ± {se_h:.3f} per step ({TEST_WORDS}{share}): that part the actor "
               "learned and only the dream pays for, which is exploitation. ")
     else:
         s += (f"Within the {H} steps its gradient saw, training did not make the dream measurably rosier "
-              f"than reality ({tr_h:+.3f} ± {se_h:.3f}): on this seed the actor found little to exploit. ")
-    if not clearly_positive(tr_e, se_e) and clearly_positive(tr_h, se_h):
-        s += ("Over the whole evaluation that advantage is gone: past its training horizon the actor's "
-              "dream is no better than the untrained one's. ")
-    s += (f"The drift, the model's own optimism with the pusher standing still, is {drift_h:+.3f} per step "
-          f"already over the first {H} steps.")
+              f"than reality ({tr_h:+.3f} ± {se_h:.3f}; it would count when {TEST_WORDS}): on this seed "
+              "the actor did not measurably exploit its dream. ")
+    exploits_e = training_exploits_eval(value=tr_e, se=se_e, k=K_SE, min_effect=MIN_REWARD_EFFECT)
+    if exploits_h and term_negative(value=tr_e, se=se_e, k=K_SE, min_effect=MIN_REWARD_EFFECT,
+                                    what="training eval_horizon, story"):
+        s += (f"Over the whole evaluation that advantage is reversed ({tr_e:+.3f} ± {se_e:.3f}, clearly negative): "
+              "past its training horizon the trained actor's dream is gloomier, against reality, than the "
+              "untrained one's. ")
+    elif exploits_h and not exploits_e:
+        s += (f"Over the whole evaluation that advantage is gone ({tr_e:+.3f} ± {se_e:.3f}): past its "
+              "training horizon the actor's dream is no rosier, against reality, than the untrained one's. ")
+    elif exploits_e and not exploits_h:
+        s += (f"Over the whole evaluation, though, training's part is clearly positive ({tr_e:+.3f} ± {se_e:.3f}): "
+              "the trained actor's dream turns rosy only after the steps its gradient saw. ")
+    if drift_rosy(value=drift_h, se=drift_se, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+        s += (f"The drift, the model's own optimism with the pusher standing still, is {drift_h:+.3f} ± "
+              f"{drift_se:.3f} per step already over the first {H} steps.")
+    else:
+        s += (f"With the pusher standing still, the dream is not measurably rosier than reality over the "
+              f"first {H} steps ({drift_h:+.3f} ± {drift_se:.3f}).")
     return s
 
 
@@ -122,8 +445,26 @@ def min_of_mean_distance(rollout, dt: float = 0.1) -> tuple[float, float]:
     return float(d[i]), i * dt
 
 
-def dip_sentence(rollouts: dict, H: int, dt: float = 0.1) -> str:
-    """Read the over-time panel: where and when the trained dream's block comes closest."""
+def typical_pose(data_mean) -> tuple[float, float]:
+    """(distance to the target in m, |yaw error| in degrees) of the expert data's mean observation
+    (``data.mean``, metres): the block pose a model that has lost track of it decodes nearest to
+    (the normalised zero). The yaw is read off the mean (sin, cos) as the reward reads it."""
+    data_mean = np.asarray(data_mean, dtype=float)
+    return (float(np.linalg.norm(data_mean[2:4])),
+            float(abs(np.degrees(np.arctan2(data_mean[4], data_mean[5])))))
+
+
+def _yaw_deg(obs) -> np.ndarray:
+    _, tee = obs_to_pose(obs)
+    return np.degrees(tee[..., 2])
+
+
+def dip_sentence(rollouts: dict, H: int, data_mean=None, dt: float = 0.1) -> str:
+    """Read the over-time panels: where and when the trained dream's block comes closest, and
+    whether, with nobody pushing, the dreamed block drifts toward the expert data's typical pose
+    (in position and in yaw), and whether that pose is near the target (registered claims).
+
+    Notebooks of an older release call it without ``data_mean``: they get the first part only."""
     d_min, t_min = min_of_mean_distance(rollouts["dream_trained"], dt)
     z_min, z_t = min_of_mean_distance(rollouts["dream_zero"], dt)
     end = float(np.linalg.norm(rollouts["dream_trained"].obs[-1, :, 2:4], axis=-1).mean())
@@ -132,17 +473,155 @@ def dip_sentence(rollouts: dict, H: int, dt: float = 0.1) -> str:
     s = (f"In the trained actor's dream the mean block distance is smallest, **{d_min:.3f} m**, at "
          f"**{t_min:.1f} s** ({where}), and ends the evaluation at **{end:.3f} m**; the zero-action "
          f"dream's smallest is {z_min:.3f} m at {z_t:.1f} s. ")
-    if t_min <= H * dt and end > d_min + NEAR:
+    if dream_block_drifts_back(t_min=t_min, horizon_s=H * dt, d_min=d_min, d_end=end, near=NEAR):
         s += "After its best moment the trained dream's block drifts back out. "
-    if z_min < d_min - NEAR:
+    if zero_dream_closer(zero_min=z_min, trained_min=d_min, near=NEAR):
         s += ("A pusher that never moves gets the dreamed block closer to the target than the trained "
-              "actor does: the model's drift, not the actor, brings the dream nearest to success.")
+              "actor does: the model's drift, not the actor, brings the dream nearest to success. ")
+    if data_mean is None:
+        return s
+    # where does a dream with nobody pushing take the block? Toward the data's typical pose?
+    data_mean = np.asarray(data_mean, dtype=float)
+    t_dist, t_yaw = typical_pose(data_mean)
+    mean_yaw = float(np.degrees(np.arctan2(data_mean[4], data_mean[5])))
+    dz, rz = rollouts["dream_zero"].obs[-1], rollouts["real_zero"].obs[-1]
+    dream_to = float(np.linalg.norm(dz[:, 2:4] - data_mean[2:4], axis=-1).mean())
+    real_to = float(np.linalg.norm(rz[:, 2:4] - data_mean[2:4], axis=-1).mean())
+    wrap = lambda a: np.abs((a - mean_yaw + 180.0) % 360.0 - 180.0)  # noqa: E731
+    dream_yaw_to, real_yaw_to = float(wrap(_yaw_deg(dz)).mean()), float(wrap(_yaw_deg(rz)).mean())
+    dz_err, rz_err = float(np.abs(_yaw_deg(dz)).mean()), float(np.abs(_yaw_deg(rz)).mean())
+    s += (f"The expert data's mean block pose sits **{t_dist:.3f} m** from the target with a yaw error of "
+          f"**{t_yaw:.0f}°**. With zero actions the real block stays where it spawned, "
+          f"{float(rollouts['real_zero'].final_tee_dist.mean()):.3f} m from the target at {rz_err:.0f}° (means "
+          f"over the starts); the dreamed one ends {float(rollouts['dream_zero'].final_tee_dist.mean()):.3f} m "
+          f"away at {dz_err:.0f}°. ")
+    pos = dream_drifts_to_data_position(dream_to_mean=dream_to, real_to_mean=real_to, near=NEAR)
+    yaw = dream_drifts_to_data_yaw(dream_to_mean_deg=dream_yaw_to, real_to_mean_deg=real_yaw_to, near_deg=NEAR_DEG)
+    where_pos = (f"its position ends {dream_to:.3f} m from the data's mean block position, against "
+                 f"{real_to:.3f} m for the real block")
+    where_yaw = (f"its yaw ends {dream_yaw_to:.0f}° from the data's mean yaw, against {real_yaw_to:.0f}° "
+                 "for the real block")
+    if pos and yaw:
+        s += (f"Left alone, the dreamed block drifts toward the data's typical pose, in position and in yaw: "
+              f"{where_pos}, and {where_yaw}. A model that loses track of the block decodes it somewhere typical. ")
+    elif pos or yaw:
+        moved, stayed = ("position", "yaw") if pos else ("yaw", "position")
+        s += (f"Left alone, the dreamed block drifts toward the data's typical {moved} "
+              f"({where_pos if pos else where_yaw}) but not toward its typical {stayed} "
+              f"({where_yaw if pos else where_pos}). ")
+    else:
+        s += (f"The dreamed block does not drift toward the data's typical pose: {where_pos}, and {where_yaw}; "
+              "its drift goes somewhere else. ")
+    if pos or yaw:
+        spawn_dist = float(rollouts["real_zero"].final_tee_dist.mean())
+        if typical_pose_near_target(typical_dist=t_dist, typical_yaw_deg=t_yaw, spawn_dist=spawn_dist,
+                                    spawn_yaw_deg=rz_err):
+            s += ("And that typical pose is near the target (less than half as far as the spawned blocks, "
+                  "in distance and in yaw), so a drift toward it reads as progress in the dream.")
+        else:
+            s += ("That typical pose is not near the target by this measure (less than half as far as the "
+                  "spawned blocks, in distance and in yaw), so the drift toward it is not, by itself, why "
+                  "the dream is rosy.")
+    return s
+
+
+# --- the expert control ---------------------------------------------------------------------------
+def expert_text(m: dict, steps: dict) -> str:
+    """Could the dream recognise success? The scripted expert's pushes against zero actions, in each
+    world, over both spans (registered claims); the actor's question is decided on the training
+    horizon, the dreams its gradient saw."""
+    def sig(world, span, half=""):
+        tag = f"_{half}" if half else ""
+        return m[f"expert_signal{tag}_{world}_{span}"], m[f"expert_signal{tag}_{world}_se_{span}"]
+
+    H = steps["train_horizon"]
+    solves = expert_solves_most(success_rate=m["expert_real_success_rate"])
+    pushes = "the pushes that solve the task" if solves else "the expert's pushes"
+    s = (f"The scripted expert solves **{m['expert_real_success_rate']:.0%}** of these starts in reality"
+         + ("" if solves else " (fewer than half: on this evaluation its pushes are not, mostly, solutions)")
+         + ". Its pushes against a pusher that never moves, per step (± one standard error over the starts):\n\n")
+    for span in SPANS:
+        (rv, rse), (dv, dse) = sig("real", span), sig("dream", span)
+        s += (f"* first {steps[span]} steps ({SPANS[span]}): reality pays them **{rv:+.3f}** ± {rse:.3f} "
+              f"(position {sig('real', span, 'position')[0]:+.3f}, yaw {sig('real', span, 'yaw')[0]:+.3f}); the dream, "
+              f"replaying the very same actions from the same starts, **{dv:+.3f}** ± {dse:.3f} (position "
+              f"{sig('dream', span, 'position')[0]:+.3f}, yaw {sig('dream', span, 'yaw')[0]:+.3f}).\n")
+    rv, rse = sig("real", "train_horizon")
+    dv, dse = sig("dream", "train_horizon")
+    s += "\n"
+    if reality_pays_expert(value=rv, se=rse, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+        s += f"Within the first {H} steps reality rewards {pushes} over standing still. "
+    else:
+        s += (f"Within the first {H} steps even reality does not reward the expert's pushes over standing still "
+              "beyond the noise and the minimum effect: those steps are too few to tell success apart. ")
+    if dream_pays_expert(value=dv, se=dse, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+        s += ("**The dream does too**" + (": it can recognise success." if solves else ".")
+              + " An actor that pushed the way the expert pushes would have been paid for it in its training "
+              "dreams: a learnable signal existed.")
+    elif dream_penalises_expert(value=dv, se=dse, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+        s += ("**The dream pays the expert's pushes less than standing still.** An actor that copied the expert "
+              "exactly would have scored *worse* in its training dreams than one that never moved: the dream's "
+              f"reward did not lead toward {pushes}, so imitating the expert was never what it asked for.")
+    else:
+        s += ("**The dream does not tell the expert's pushes apart from standing still** (not beyond the noise "
+              "and the minimum effect): the signal an actor would need to learn the task is not there.")
+    s += f" (Each verdict: {TEST_WORDS}.)"
+    return s
+
+
+# --- what the policy did in reality ---------------------------------------------------------------
+def real_vs_zero(rollouts: dict) -> tuple[float, float]:
+    """(mean, standard error) over the starts of the trained policy's real reward per step minus
+    that of zero actions, on the same starts."""
+    x = rollouts["real_trained"].return_per_step - rollouts["real_zero"].return_per_step
+    x = x[~np.isnan(x)]
+    return float(x.mean()), float(x.std(ddof=1) / np.sqrt(len(x))) if len(x) > 1 else float("nan")
+
+
+def pusher_paths_text(m: dict, rollouts: dict, n_eval: int, touch_tol: float) -> str:
+    """What the policy did to the real block: its reward against zero actions (a claim), contact,
+    and how far the block moved."""
+    diff, se = real_vs_zero(rollouts)
+    r_t = float(np.nanmean(rollouts["real_trained"].return_per_step))
+    r_z = float(np.nanmean(rollouts["real_zero"].return_per_step))
+    s = (f"In reality the trained policy earns **{r_t:+.3f}** per step; a pusher that never moves earns "
+         f"**{r_z:+.3f}** from the same starts (difference {diff:+.3f} ± {se:.3f}). ")
+    if real_beats_zero(diff=diff, se=se, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+        s += "So the trained policy does clearly better in reality than standing still. "
+    elif real_worse_than_zero(diff=diff, se=se, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+        s += "So the trained policy does clearly *worse* in reality than standing still: its pushes cost reward. "
+    else:
+        s += "So in reality the trained policy does no better than standing still, by the reward's account. "
+    s += (f"(A difference counts when it is {TEST_WORDS}.) The pusher's rim came within {100 * touch_tol:.1f} cm "
+          f"of the block in **{m['real_episodes_touching_block']}/{n_eval}** starts; on average its closest approach "
+          f"was **{100 * m['real_pusher_min_gap']:.1f} cm**, and the real block moved **{m['real_block_displacement']:.3f} m** "
+          f"on average (at most {m['real_block_displacement_max']:.3f} m).")
+    return s
+
+
+def company_text(m: dict, H: int) -> str:
+    """After "good company": whether this run's gap is exploitation or the dream's own drift."""
+    tr, tse = m["gap_training_train_horizon"], m["gap_training_se_train_horizon"]
+    dr, dse = m["gap_drift_train_horizon"], m["gap_drift_se_train_horizon"]
+    if training_exploits(value=tr, se=tse, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+        s = (f"**On your run** the actor did exploit its dream: within the {H} steps its gradient saw, training "
+             f"made the dream rosier than reality by {tr:+.3f} ± {tse:.3f} per step. ")
+    else:
+        s = (f"**On your run** the gap is not the actor's exploitation: within the {H} steps its gradient saw, "
+             f"training's part is {tr:+.3f} ± {tse:.3f} per step, not {TEST_WORDS}. ")
+    if drift_rosy(value=dr, se=dse, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+        s += (f"The dream is rosy even with nobody pushing ({dr:+.3f} ± {dse:.3f} over the same steps): an actor "
+              "trained in it is graded on a model that flatters doing nothing, and the remedies above are about "
+              "that too, since both give the model data or doubt where it is wrong.")
+    else:
+        s += (f"With nobody pushing, the dream is not measurably rosier than reality over those steps "
+              f"({dr:+.3f} ± {dse:.3f}).")
     return s
 
 
 # --- distribution shift ---------------------------------------------------------------------------
 def shift_sentence(m: dict, dt: float = 0.1) -> str:
-    """Distribution shift, in words, from the metrics of ``analysis.shift_metrics``."""
+    """Distribution shift, in words, from the metrics of ``analysis.shift_metrics`` (claims)."""
     H = m["imag_horizon"]
     s = (f"The expert data has the pusher against a wall in **{m['expert_pusher_at_wall_share']:.0%}** of its "
          f"steps; the deployed policy in **{m['real_pusher_at_wall_share']:.0%}** of its real steps. ")
@@ -150,21 +629,49 @@ def shift_sentence(m: dict, dt: float = 0.1) -> str:
           f"off after {H * dt:.1f} s, against {100 * m['expert_replay_pusher_err_train_horizon']:.1f} cm on held-out "
           f"expert clips; its block is {100 * m['replay_block_err_train_horizon']:.1f} cm off (expert clips: "
           f"{100 * m['expert_replay_block_err_train_horizon']:.1f} cm). ")
-    worse = m["replay_pusher_err_train_horizon"] > m["expert_replay_pusher_err_train_horizon"]
+    worse = pusher_tracked_worse(policy_err=m["replay_pusher_err_train_horizon"],
+                                 expert_err=m["expert_replay_pusher_err_train_horizon"], near=NEAR)
     s += ("So the model tracks the pusher worse on the policy's data than on the expert's: the policy "
           "has left the data the model knows. " if worse else
-          "On the pusher, the model tracks the policy's data about as well as the expert's. ")
+          "On the pusher, the model tracks the policy's data about as well as the expert's (within 5 mm). ")
     s += (f"The evaluation dream runs **{m['dream_steps_per_train_clip']:.2f}x** longer than the "
-          f"{m['train_clip_steps']}-step clips the model trained on. Its end points collapse: the dreamed "
-          f"blocks end a mean **{m['dream_final_block_spread']:.3f} m** from their common centre, the real "
-          f"ones {m['real_final_block_spread']:.3f} m (they spawned {m['spawn_block_spread']:.3f} m apart, "
-          "measured the same way).")
+          f"{m['train_clip_steps']}-step clips the model trained on. The dreamed blocks end a mean "
+          f"**{m['dream_final_block_spread']:.3f} m** from their common centre, the real ones "
+          f"{m['real_final_block_spread']:.3f} m (they spawned {m['spawn_block_spread']:.3f} m apart, measured "
+          "the same way)")
+    if dream_ends_collapse(dream_spread=m["dream_final_block_spread"], real_spread=m["real_final_block_spread"],
+                           near=NEAR):
+        s += ": the dream's end points collapse toward one place, whatever the start."
+    else:
+        s += ": the dream's end points are about as spread as the real ones (within 5 mm, or more)."
     return s
 
 
 # --- across seeds --------------------------------------------------------------------------------
-def seeds_sentence(metrics: dict) -> str:
-    """Seeds side by side: the range of the gap and what the largest one is made of."""
+SEED_COLUMNS = [("imagination_gap", "gap", "+.3f"),
+                ("imagination_gap_position_eval_horizon", "gap: position", "+.3f"),
+                ("imagination_gap_yaw_eval_horizon", "gap: yaw", "+.3f"),
+                ("imagination_gap_train_horizon", "gap, training horizon", "+.3f"),
+                ("gap_drift_eval_horizon", "drift", "+.3f"), ("gap_training_eval_horizon", "training", "+.3f"),
+                ("gap_training_train_horizon", "training, training horizon", "+.3f"),
+                ("expert_signal_dream_train_horizon", "dream pays the expert, training horizon", "+.3f"),
+                ("real_pusher_at_wall_share", "real steps at a wall", ".0%"),
+                ("real_final_tee_dist", "real tee-dist (m)", ".3f"), ("spawn_tee_dist", "spawn (m)", ".3f"),
+                ("real_success_rate", "real success", ".0%")]
+
+
+def seeds_table(metrics: dict) -> str:
+    """The seeds side by side, a markdown table (columns ``SEED_COLUMNS``; the whole evaluation
+    unless the column says otherwise; the expert column is expert minus zero actions per step)."""
+    rows = ["| seed | " + " | ".join(c[1] for c in SEED_COLUMNS) + " |", "|---|" + "---|" * len(SEED_COLUMNS)]
+    rows += [f"| {s} | " + " | ".join(format(m[k], f) for k, _, f in SEED_COLUMNS) + " |" for s, m in metrics.items()]
+    return "\n".join(rows)
+
+
+def seeds_sentence(metrics: dict, rollouts: dict | None = None) -> str:
+    """Seeds side by side: the range of the gap, what the largest one is made of, which half of
+    the gap dominates on each seed (per-start noise when each seed's ``rollouts`` are given), and
+    whether the drift is most of the gap on every seed."""
     gaps = {s: m["imagination_gap"] for s, m in metrics.items()}
     lo, hi = min(gaps.values()), max(gaps.values())
     big = max(gaps, key=gaps.get)
@@ -172,14 +679,21 @@ def seeds_sentence(metrics: dict) -> str:
     s = (f"Across seeds {', '.join(map(str, metrics))} the gap runs from **{lo:+.3f}** to **{hi:+.3f}** per step "
          f"and real success is zero on **{sum(m['real_success_rate'] == 0 for m in metrics.values())}/"
          f"{len(metrics)}** seeds. The largest gap is seed {big}'s: over the whole evaluation its drift is "
-         f"{mb['gap_drift_eval_horizon']:+.3f} and training adds {mb['gap_training_eval_horizon']:+.3f} "
-         f"(± {mb['gap_training_se_eval_horizon']:.3f}); over the training horizon training adds "
+         f"{mb['gap_drift_eval_horizon']:+.3f} and training's part is {mb['gap_training_eval_horizon']:+.3f} "
+         f"(± {mb['gap_training_se_eval_horizon']:.3f}); over the training horizon training's part is "
          f"{mb['gap_training_train_horizon']:+.3f} (± {mb['gap_training_se_train_horizon']:.3f}). ")
+    halves = {s: dominant_half(m, "eval_horizon", None if rollouts is None else
+                               half_difference_se(rollouts[s], None)) for s, m in metrics.items()}
+    by = {h: [str(s) for s, v in halves.items() if v == h] for h in ("yaw", "position", None)}
+    said = [f"yaw on seed{'s' * (len(by['yaw']) > 1)} {', '.join(by['yaw'])}" if by["yaw"] else "",
+            f"position on seed{'s' * (len(by['position']) > 1)} {', '.join(by['position'])}" if by["position"] else "",
+            f"neither, beyond the noise, on seed{'s' * (len(by[None]) > 1)} {', '.join(by[None])}" if by[None] else ""]
+    s += ("Over the whole evaluation, the larger half of the gap (beyond the noise and the minimum effect) is "
+          + "; ".join(x for x in said if x) + ". ")
     drifts = [m["gap_drift_eval_horizon"] for m in metrics.values()]
     s += (f"The drift alone ranges from {min(drifts):+.3f} to {max(drifts):+.3f}: "
-          + ("on every seed it is most of the gap." if all(m["gap_drift_eval_horizon"] >= 0.5 * m["imagination_gap"]
-                                                        for m in metrics.values())
-             else "on some seeds the actor's own contribution is the larger part."))
+          + ("on every seed it is at least half of the gap." if drift_most_every_seed(drifts=drifts, gaps=list(gaps.values()))
+             else "on some seeds it is less than half of the gap."))
     return s
 
 
@@ -198,7 +712,7 @@ def fig_two_worlds(dream_roll, real_roll, gap: float, seed: int, seconds: float)
 
     spawn = np.linalg.norm(real_roll.obs[0, :, 2:4], axis=-1)
     rng = np.random.default_rng(0)                       # horizontal jitter for the dots only
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
+    fig, axes = plt.subplots(1, 3, figsize=(13, 5.0))
     ax = axes[0]
     vals = [dream_roll.return_per_step, real_roll.return_per_step]
     for x, (name, v) in enumerate(zip(["dream", "real"], vals)):
@@ -212,7 +726,7 @@ def fig_two_worlds(dream_roll, real_roll, gap: float, seed: int, seconds: float)
     ax.set_xticks([0, 1], ["in the dream", "in reality"])
     ax.set_ylabel("mean reward per step (0 = block on target)")
     ax.set_title("Reward per step")
-    ax.legend(loc="lower left", fontsize=8)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), fontsize=8)
     ax = axes[1]
     vals = [dream_roll.final_tee_dist, real_roll.final_tee_dist]
     for x, (name, v) in enumerate(zip(["dream", "real"], vals)):
@@ -222,8 +736,8 @@ def fig_two_worlds(dream_roll, real_roll, gap: float, seed: int, seconds: float)
     ax.set_xticks([0, 1], ["in the dream", "in reality"])
     ax.set_ylabel("block-to-target distance at the end (m)")
     ax.set_title(f"Where the block ends ({seconds:.0f} s)")
-    ax.legend(loc="upper left", fontsize=8)
-    ax.set_ylim(0, max(v.max() for v in vals) * 1.25)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), fontsize=8)
+    ax.set_ylim(0, max(v.max() for v in vals) * 1.1)
     ax = axes[2]
     solved = [solved_at_some_step(dream_roll), real_roll.success]
     for x, s in enumerate(solved):
@@ -246,7 +760,7 @@ def fig_decomposition(m: dict, steps: dict):
     """
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 3, figsize=(16, 4.4), gridspec_kw={"width_ratios": [1, 1, 1.2]})
+    fig, axes = plt.subplots(1, 3, figsize=(16, 5.0), gridspec_kw={"width_ratios": [1, 1, 1.2]})
     x = np.arange(3)
     for ax, span in zip(axes[:2], SPANS):
         for dx, world in ((-0.2, "dream"), (0.2, "real")):
@@ -256,7 +770,6 @@ def fig_decomposition(m: dict, steps: dict):
         ax.axhline(0, color="k", lw=0.8)
         ax.set_ylabel("mean reward per step")
         ax.set_title(f"First {steps[span]} steps ({SPANS[span]})")
-        ax.legend(fontsize=8, loc="lower center")
     lo = min(m[f"{p}_{w}_return_per_step_{s}"] for p in POLICY_LABELS for w in ("dream", "real") for s in SPANS)
     for ax in axes[:2]:
         ax.set_ylim(1.3 * lo, 0)
@@ -272,36 +785,78 @@ def fig_decomposition(m: dict, steps: dict):
                                           for v in TERMS.values())], fontsize=8)
     ax.axhline(0, color="k", lw=0.8)
     ax.set_ylabel("reward per step (dream minus reality)")
-    ax.set_title("The gap = drift + motion + training (bars: ±2 standard errors)")
-    ax.legend(fontsize=8)
+    ax.set_title("The gap = drift + motion + training\n(bars: ±2 standard errors)")
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
+    axes[0].legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=2)
     fig.suptitle("Three policies, two worlds, two horizons (same starts)")
     fig.tight_layout()
     return fig
 
 
 @figure
-def fig_block_over_time(rollouts: dict, H: int, clip: int, data_mean_dist: float, dt: float = 0.1):
-    """Mean block-to-target distance over time: three policies in the dream, the trained one in
-    reality, with the training horizon and the model's training-clip length marked."""
+def fig_block_over_time(rollouts: dict, H: int, clip: int, data_mean_dist: float,
+                        data_mean_yaw_deg: float | None = None, dt: float = 0.1):
+    """Mean block-to-target distance (left) and mean |yaw error| in degrees (right) over time: three
+    policies in the dream, zero actions and the trained one in reality, with the training horizon,
+    the model's training-clip length and the expert data's mean block pose marked."""
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(9, 4.2))
+    fig, (ax, ay) = plt.subplots(1, 2, figsize=(13, 4.6))
     T = len(rollouts["dream_trained"].obs)
     t = np.arange(T) * dt
-    for p, ls in zip(POLICY_LABELS, [":", "-.", "-"]):
-        d = np.linalg.norm(rollouts[f"dream_{p}"].obs[:, :, 2:4], axis=-1).mean(1)
-        ax.plot(t, d, ls=ls, color=COLORS["dream"], label=f"dream, {POLICY_LABELS[p]}")
-    ax.plot(t, np.linalg.norm(rollouts["real_trained"].obs[:, :, 2:4], axis=-1).mean(1), color=COLORS["real"],
-            label="reality, trained actor")
-    ax.axvline(H * dt, color="k", ls="--", lw=1, label=f"the actor's training horizon ({H} steps)")
-    ax.axvline(clip * dt, color="tab:gray", ls=":", lw=1.2, label=f"the model's training clips ({clip} steps)")
-    ax.axhline(data_mean_dist, color="tab:green", ls=":", lw=1.5, label="mean block position in the expert data")
-    ax.set_xlabel("time in the evaluation rollout (s)")
+    dist = lambda r: np.linalg.norm(r.obs[:, :, 2:4], axis=-1).mean(1)           # noqa: E731
+    yaw = lambda r: np.abs(_yaw_deg(r.obs)).mean(1)                              # noqa: E731
+    curves = [(f"dream_{p}", ls, COLORS["dream"], f"dream, {POLICY_LABELS[p]}")
+              for p, ls in zip(POLICY_LABELS, [":", "-.", "-"])]
+    curves += [("real_zero", ":", COLORS["real"], "reality, zero actions"),
+               ("real_trained", "-", COLORS["real"], "reality, trained actor")]
+    for key, ls, color, label in curves:
+        if key in rollouts:
+            ax.plot(t, dist(rollouts[key]), ls=ls, color=color, label=label)
+            ay.plot(t, yaw(rollouts[key]), ls=ls, color=color)
+    for a in (ax, ay):
+        a.axvline(H * dt, color="k", ls="--", lw=1, label=f"the actor's training horizon ({H} steps)" if a is ax else None)
+        a.axvline(clip * dt, color="tab:gray", ls=":", lw=1.2,
+                  label=f"the model's training clips ({clip} steps)" if a is ax else None)
+        a.set_xlabel("time in the evaluation rollout (s)")
+        a.set_ylim(0, None)
+    ax.axhline(data_mean_dist, color="tab:green", ls=":", lw=1.5, label="the expert data's mean block pose")
+    if data_mean_yaw_deg is not None:
+        ay.axhline(data_mean_yaw_deg, color="tab:green", ls=":", lw=1.5)
     ax.set_ylabel("mean block-to-target distance (m)")
-    ax.set_title("Where the block is, step by step (mean over the starts)")
-    ax.set_ylim(0, None)
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    fig.tight_layout()
+    ax.set_title("Where the block is (mean over the starts)")
+    ay.set_ylabel("mean |yaw error| of the block (degrees)")
+    ay.set_title("How the block is turned (mean over the starts)")
+    fig.legend(*ax.get_legend_handles_labels(), loc="lower center", ncol=4, fontsize=8)
+    fig.suptitle("The block step by step: three policies in the dream, two in reality")
+    fig.tight_layout(rect=(0, 0.12, 1, 1))
+    return fig
+
+
+@figure
+def fig_expert_control(m: dict, steps: dict):
+    """The scripted expert's pushes against zero actions, per step, in the dream and in reality,
+    over both spans, for the whole reward and each of its terms, with 2-SE bars and the minimum
+    effect that matters shaded."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.4), sharey=True)
+    x = np.arange(3)
+    for ax, span in zip(axes, SPANS):
+        for dx, world in ((-0.2, "dream"), (0.2, "real")):
+            keys = [f"expert_signal{tag}_{world}" for tag in ("", "_position", "_yaw")]
+            ax.bar(x + dx, [m[f"{k}_{span}"] for k in keys], 0.4,
+                   yerr=[K_SE * m[f"{k}_se_{span}"] for k in keys], capsize=3, color=COLORS[world], alpha=0.85,
+                   label="in the dream (the expert's actions replayed)" if world == "dream" else "in reality")
+        ax.axhspan(-MIN_REWARD_EFFECT, MIN_REWARD_EFFECT, color="0.85", zorder=0,
+                   label=f"smaller than the minimum effect (±{MIN_REWARD_EFFECT:.2f})")
+        ax.axhline(0, color="k", lw=0.8)
+        ax.set_xticks(x, ["whole reward", "position term", "yaw term"])
+        ax.set_title(f"First {steps[span]} steps ({SPANS[span]})")
+    axes[0].set_ylabel("expert minus zero actions\n(reward per step; bars: ±2 standard errors)")
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="lower center", ncol=3, fontsize=8)
+    fig.suptitle("Does each world pay the pushes that solve the task more than standing still?")
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     return fig
 
 
@@ -334,9 +889,9 @@ def fig_distribution_shift(real_roll, dream_roll, at_wall_real: np.ndarray, expe
                 label=f"{key}, replaying held-out expert clips")
     ax.axvline(clip * dt, color="tab:gray", ls=":", lw=1.2, label=f"length of the training clips ({clip} steps)")
     ax.set_xlabel("time since the start frame (s)")
-    ax.set_ylabel("dreamed minus true position (m, mean)")
+    ax.set_ylabel("distance between dreamed and true position\n(m, mean over the starts)")
     ax.set_title("The model replaying actions it is given")
-    ax.legend(fontsize=7, loc="upper left")
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
     ax.set_ylim(0, None)
     ax = axes[2]
     setup_arena(ax, "Where the blocks end (one dot per start)")
@@ -346,8 +901,8 @@ def fig_distribution_shift(real_roll, dream_roll, at_wall_real: np.ndarray, expe
     ax.scatter(dream_roll.obs[-1, :, 2], dream_roll.obs[-1, :, 3], s=16, color=COLORS["dream"], label="dream, end")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.legend(fontsize=7, loc="lower right")
-    fig.suptitle("The deployed policy leaves the data the model knows")
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=3)
+    fig.suptitle("Does the deployed policy leave the data the model knows?")
     fig.tight_layout()
     return fig
 
@@ -380,12 +935,6 @@ def fig_pusher_paths(real_roll, touch_tol: float, seconds: float, seed: int, n: 
     return fig
 
 
-def median_start(dream_roll, real_roll) -> int:
-    """The start whose dream-minus-real final distance is the median one: a typical start."""
-    d = dream_roll.final_tee_dist - real_roll.final_tee_dist
-    return int(np.argsort(d)[len(d) // 2])
-
-
 # --- self-checks ---------------------------------------------------------------------------------
 SELF_CHECKS = {
     "zero_control": Question(
@@ -397,21 +946,24 @@ SELF_CHECKS = {
         "b", "Drift is defined as dream minus reality for the same policy; with zero actions, "
              "reality is the spawn pose's reward, the baseline the dream is judged against."),
     "two_horizons": Question(
-        "Training's share of the gap can differ between the first 15 steps and the full 100. Why "
-        "measure it at the training horizon at all?",
+        "Training's share of the gap can differ between the actor's training horizon and the whole "
+        "evaluation. Why measure it at the training horizon at all?",
         {"a": "Because the actor's gradient only ever saw dreams of that length: exploitation, if "
               "any, must show up there first",
-         "b": "Because the evaluation is too noisy at 100 steps",
-         "c": "Because the critic is only trained for 15 steps"},
-        "a", "The actor optimised the lambda-return of its training dreams; what it learned to "
-             "exploit is exploited within them. Past that horizon the model drifts on its own."),
+         "b": "Because the evaluation is too noisy over its whole length",
+         "c": "Because the real simulator cannot run longer than that"},
+        "a", "The actor optimised the lambda-return of its training dreams; whatever it learned to "
+             "exploit, if anything, pays off within them. Past that horizon the model drifts on its own, "
+             "and the training term there mixes exploitation with what the actor does to a dream it "
+             "was never trained on."),
     "shift": Question(
-        "On expert data the model beats 'copy the last frame' on the pusher (notebook 01). Why is "
-        "that not enough to trust it on the deployed policy's data?",
+        "A world model can predict its own kind of data well (notebook 01 measured it on held-out "
+        "expert clips). Why is that not enough to trust it on the deployed policy's data?",
         {"a": "It is enough: the pusher's kinematics do not depend on who commands it",
-         "b": "Because the policy visits states the expert data never shows (the pusher pinned "
-              "against a wall), and a model is only measured where its data was",
+         "b": "Because a policy can visit states the training data never shows (for example the "
+              "pusher pinned against a wall), and a model is only measured where its data was",
          "c": "Because the policy's actions are larger than the expert's"},
-        "b", "A wall stops the real pusher; in the expert data it never met one, so the model "
-             "never saw a commanded motion that does not happen. The replay error above measures it."),
+        "b", "A model is fitted, and tested, where its data was. If the policy drives the pusher where "
+             "the expert never went (into a wall that stops it, say), the model never saw what happens "
+             "there. The replay error above measures what that costs on this run."),
 }

@@ -6,11 +6,11 @@ notebook draws them with the learner's own ``reward_from_obs`` (signature ``(nor
 
 Figures (each returns a ``matplotlib`` Figure; the notebook shows it and saves it):
 
-    reward_heatmap_figure        reward over the block's position, yaw 0        02_reward_heatmap.png
-    reward_yaw_figure            reward against the block's yaw error           02_reward_yaw.png
-    reward_one_sequence_figure   one held-out sequence scored three ways        02_reward_one_sequence.png
-    final_pose_figure            truth and dream at the end of that sequence    02_final_pose.png
-    reward_error_figure          decoded-frame reward minus true reward         02_reward_error.png
+    fig_reward_heatmap           reward over the block's position, yaw 0        02_reward_heatmap.png
+    fig_reward_yaw               reward against the block's yaw error           02_reward_yaw.png
+    fig_reward_one_sequence      one held-out sequence scored three ways        02_reward_one_sequence.png
+    fig_final_pose               truth and dream at the end of that sequence    02_final_pose.png
+    fig_reward_error             decoded-frame reward minus true reward         02_reward_error.png
 
 Conclusions: the shape of the reward (``cone_verdict``, ``half_turn``) and how far a reward read
 off decoded frames is from the true one (``reward_errors``, ``error_summary``).
@@ -263,7 +263,7 @@ def recap_text(v: dict) -> str:
 
 # --- figures ----------------------------------------------------------------------------------
 @figure
-def reward_heatmap_figure(reward_fn, mean, std, pusher_xy, n: int = 201):
+def fig_reward_heatmap(reward_fn, mean, std, pusher_xy, n: int = 201):
     """The reward per step over the block's centre (yaw 0) across the arena."""
     import matplotlib.pyplot as plt
     from matplotlib.patches import Polygon, Rectangle
@@ -294,7 +294,7 @@ def reward_heatmap_figure(reward_fn, mean, std, pusher_xy, n: int = 201):
 
 
 @figure
-def reward_yaw_figure(reward_fn, mean, std, pusher_xy, spawn_dist: float):
+def fig_reward_yaw(reward_fn, mean, std, pusher_xy, spawn_dist: float):
     """The reward per step against the block's yaw, on the target and ``spawn_dist`` m along x."""
     import matplotlib.pyplot as plt
 
@@ -318,7 +318,7 @@ def reward_yaw_figure(reward_fn, mean, std, pusher_xy, spawn_dist: float):
 
 
 @figure
-def reward_one_sequence_figure(views: dict, i: int, moved: float, context: int, dt: float = CONTROL_DT):
+def fig_reward_one_sequence(views: dict, i: int, moved: float, context: int, dt: float = CONTROL_DT):
     """Reward, block distance and yaw error of sequence ``i``, read off the true frames, the
     filtered reconstruction and the open-loop dream (``reward_views``)."""
     import matplotlib.pyplot as plt
@@ -346,7 +346,7 @@ def reward_one_sequence_figure(views: dict, i: int, moved: float, context: int, 
 
 
 @figure
-def final_pose_figure(true_end, dream_end, i: int, t_end: float):
+def fig_final_pose(true_end, dream_end, i: int, t_end: float):
     """The true and the dreamed state (metres) at the end of sequence ``i``, one arena."""
     import matplotlib.pyplot as plt
 
@@ -361,7 +361,7 @@ def final_pose_figure(true_end, dream_end, i: int, t_end: float):
 
 
 @figure
-def reward_error_figure(e: dict, t_dream):
+def fig_reward_error(e: dict, t_dream):
     """Signed and absolute error of the reward read off decoded frames, over dreamed time, for
     the reconstruction, the dream and copy-last (``reward_errors``)."""
     import matplotlib.pyplot as plt

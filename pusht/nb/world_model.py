@@ -2,11 +2,11 @@
 
 Figures (each returns a ``matplotlib`` Figure; the notebook shows it and saves it):
 
-    starts_figure            three random PushT starts                       01_starts.png
-    expert_figure            one expert episode                              01_expert.png
-    losses_figure            the world model's two training losses           01_wm_losses.png
-    copy_last_figure         model error / copy-last error, per dimension    01_copy_last.png
-    dream_vs_true_figure     one held-out sequence, dreamed and true         01_dream_vs_true.png
+    fig_starts               three random PushT starts                       01_starts.png
+    fig_expert               one expert episode                              01_expert.png
+    fig_losses               the world model's two training losses           01_wm_losses.png
+    fig_copy_last            model error / copy-last error, per dimension    01_copy_last.png
+    fig_dream_vs_true        one held-out sequence, dreamed and true         01_dream_vs_true.png
 
 Conclusions (numbers, booleans and the sentences built from them): what moves in the data
 (``motion_shares``), how the model compares with copy-last (``copy_last_verdict``), and what the
@@ -416,7 +416,7 @@ def loss_text(s: dict) -> str:
 
 # --- figures ----------------------------------------------------------------------------------
 @figure
-def starts_figure(seeds=(0, 1, 2)):
+def fig_starts(seeds=(0, 1, 2)):
     """Random PushT starts ``env.reset(seed)``, one panel each."""
     import matplotlib.pyplot as plt
 
@@ -431,7 +431,7 @@ def starts_figure(seeds=(0, 1, 2)):
 
 
 @figure
-def expert_figure(obs, actions, success: bool, dt: float = CONTROL_DT):
+def fig_expert(obs, actions, success: bool, dt: float = CONTROL_DT):
     """One expert episode: the pusher's path and the T fading in from its start pose."""
     import matplotlib.pyplot as plt
 
@@ -448,7 +448,7 @@ def expert_figure(obs, actions, success: bool, dt: float = CONTROL_DT):
 
 
 @figure
-def losses_figure(history: dict, n_updates_per_epoch: int | None = None, batch_size: int | None = None):
+def fig_losses(history: dict, n_updates_per_epoch: int | None = None, batch_size: int | None = None):
     """The two world-model losses per update, log scale."""
     import matplotlib.pyplot as plt
 
@@ -470,7 +470,7 @@ def losses_figure(history: dict, n_updates_per_epoch: int | None = None, batch_s
 
 
 @figure
-def copy_last_figure(error: dict, open_steps: int, se: dict | None = None):
+def fig_copy_last(error: dict, open_steps: int, se: dict | None = None):
     """Per-dimension held-out RMSE of the model divided by copy-last's, one step and open loop;
     with ``se`` (``copy_last_noise``), error bars of two bootstrap standard errors."""
     import matplotlib.pyplot as plt
@@ -503,7 +503,7 @@ def copy_last_figure(error: dict, open_steps: int, se: dict | None = None):
 
 
 @figure
-def dream_vs_true_figure(true, dream, context: int, first_push_step: int, index: int,
+def fig_dream_vs_true(true, dream, context: int, first_push_step: int, index: int,
                          dt: float = CONTROL_DT):
     """The block's four dimensions over one sequence: true (T+1, 6) and the open-loop dream of
     frames ``context .. T``; lines mark where the dream starts and where the block is first pushed."""

@@ -1,0 +1,60 @@
+"""How long each notebook takes, measured: the line a notebook prints under its title.
+
+``make times`` (``scripts/chapter.py --record-times``) runs the six notebooks in order at the
+default config and writes ``times.json`` beside this module: per notebook, the seconds the whole
+notebook took and the seconds of each predict-then-run experiment cell (papermill's per-cell
+``duration``), with the host, the date and the commit. Nothing here is typed in; a notebook whose
+times were never recorded says so.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+TIMES = Path(__file__).with_name("times.json")
+EXERCISE = re.compile(r"""run_exercise\(\s*["'](ex\d+)["']""")
+
+
+def _minutes(seconds: float) -> str:
+    if seconds < 60:
+        return f"{max(1, round(seconds / 5) * 5):.0f} s"
+    return f"{seconds / 60:.0f} min" if seconds >= 570 else f"{seconds / 60:.1f} min"
+
+
+def measure(executed_notebook) -> dict:
+    """{"seconds": whole notebook, "exercises": {"ex1": seconds of its experiment cell}} from an
+    executed notebook (an ``nbformat`` node) that papermill ran."""
+    total, exercises = 0.0, {}
+    for cell in executed_notebook.cells:
+        d = cell.get("metadata", {}).get("papermill", {}).get("duration")
+        if d is None:
+            continue
+        total += float(d)
+        m = EXERCISE.search(cell.source) if cell.cell_type == "code" else None
+        if m:
+            exercises[m.group(1)] = round(float(d), 1)
+    return {"seconds": round(total, 1), "exercises": exercises}
+
+
+def estimate(notebook: str, path: Path = TIMES) -> str:
+    """The time line for ``notebook`` ("04_imagination_gap"), in markdown."""
+    try:
+        data = json.loads(path.read_text())
+        rec = data["notebooks"][notebook]
+    except (OSError, ValueError, KeyError):
+        return "*Time: not measured yet for this notebook (`make times` records it).*"
+    ex = "".join(f"; Exercise {k[2:]}'s experiment cell about {_minutes(v)}" for k, v in rec["exercises"].items())
+    return (f"**Time:** about **{_minutes(rec['seconds'])}** of computing to run top to bottom at the default "
+            f"config{ex}, measured on {data['host']} ({data['measured_at'][:10]}, commit {data['commit']}), "
+            "running the notebooks in order so that each reuses the models the earlier ones trained and "
+            "cached. More cores train seeds side by side and go faster; `SMOKE = True` runs in seconds. "
+            "Your own reading and writing time comes on top.")
+
+
+def time_note(notebook: str):
+    """The time line as a displayable Markdown object (a notebook cell's last expression)."""
+    from IPython.display import Markdown
+
+    return Markdown(estimate(notebook))
