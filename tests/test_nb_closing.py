@@ -61,6 +61,8 @@ def metrics(dream=-0.215, real=-0.400, se=0.020, dream_tr=-0.285, real_tr=-0.400
         m.setdefault(f"expert_signal_real_se_{span}", 0.014)
     m.setdefault("gap_drift_yaw_eval_horizon", 0.6 * m["gap_drift_eval_horizon"])
     m.setdefault("gap_drift_position_eval_horizon", m["gap_drift_eval_horizon"] - m["gap_drift_yaw_eval_horizon"])
+    m.setdefault("gap_drift_se_yaw_eval_horizon", 0.8 * m["gap_drift_se_eval_horizon"])
+    m.setdefault("gap_drift_se_position_eval_horizon", 0.7 * m["gap_drift_se_eval_horizon"])
     return m
 
 
@@ -217,6 +219,7 @@ def test_the_table_has_a_row_per_round_with_its_numbers():
 def test_the_model_error_sentence_reads_every_round():
     rounds = loop([-0.2] * 4)
     s = nb06.model_error_sentence(rounds)
+    assert "a resolution, not a test" in s
     assert "64.0 -> 16.0 -> 7.1 -> 4.0 mm (fell in every round)" in s
     assert "held within 1 mm throughout" in s                                # expert one-step: constant
     errors = [model_errors(b, 0.1 / (r + 1), expert_block=0.01 + 0.002 * r, ol_expert=(0.035 + 0.005 * r, 0.06))
@@ -247,8 +250,13 @@ def test_the_block_sentence_reads_touches_and_direction():
     assert "more, beyond the noise" in s and "not toward the target" in s
     s = nb06.block_sentence(loop([-0.2, -0.3], touches=13, moved=0.05, moved_max=0.06, toward=0.045))
     assert "closer, beyond the noise" in s and "toward the target, measurably" in s
+    assert "independent samples" in s and "McNemar" in s and "approximation" in s
+    assert "k = 2.05" in s and "upper bound on the standard error" in s and "minimum effect of 0.02 m" in s
     s = nb06.block_sentence(loop([-0.2, -0.3], touches=3, moved=0.004, moved_max=0.06, toward=0.0))
     assert "3, 3 of 30 evaluation episodes." in s and "not told apart by these starts" in s
+    # beyond the bound on the noise (no spread at all) but 1 cm: below the success tolerance
+    small = nb06.block_sentence(loop([-0.2, -0.3], moved=0.013, moved_max=0.013))
+    assert "not told apart by these starts" in small
 
 
 def single(**kw):
@@ -302,10 +310,14 @@ def test_the_ensemble_sentence_reads_gaps_and_shared_bias():
     s = nb06.ensemble_sentence(single(), ensemble(), penalty=1.0)
     assert "+0.274 ± 0.020" in s and "higher than the single model's, beyond the noise" in s
     assert "The ensemble with its penalty does not count as a fix" in s and "The expert control" in s
-    assert "0.036 m" in s and "0.180 m" in s and "share" in s and "cannot see it" in s
-    assert "penalty of 1 per metre" in s and "0.036 per step" in s
+    assert "0.036 m" in s and "0.180 m" in s and "share" in s and "cannot see" in s
+    assert "two different rollouts" in s and "evaluation dream" in s
+    assert "penalty of 1 per metre" in s and "would cost 0.036 per step" in s and "not in these metrics" in s
+    trained = nb06.ensemble_sentence(single(), ensemble(), penalty=1.0, train_disagreement=[0.05] * 30 + [0.03] * 20)
+    assert "paid about 0.030 per step" in trained and "own training dreams" in trained
+    assert "last 20 training iterations" in trained and "would cost" not in trained
     flagged = nb06.ensemble_sentence(single(), ensemble(dis=0.3))
-    assert "does flag the error" in flagged and "cannot see it" not in flagged and "penalty of" not in flagged
+    assert "may flag the error" in flagged and "cannot see" not in flagged and "penalty of" not in flagged
     same = nb06.ensemble_sentence(single(), ensemble(dream=-0.21, dream_tr=-0.28))
     assert "higher than" not in same and same.count("not told apart from the single model's") == 2
     assert "no ensemble disagreement" in nb06.ensemble_sentence(single(), single())
@@ -364,12 +376,21 @@ def test_self_checks_are_well_formed():
 
 
 # --- the yaw half, the expert control, the fix verdict, every seed --------------------------------
-def test_the_halves_say_which_is_larger():
+def test_the_halves_say_which_is_larger_only_beyond_the_noise_and_the_minimum_effect():
     m = metrics(yaw_frac=0.6)
-    assert "the yaw half is the larger" in nb06.halves_words(m)
-    assert "the position half is the larger" in nb06.halves_words(metrics(yaw_frac=0.3))
+    # |yaw| - |position| = 0.037: within k = 2.05 times the bound 0.014 + 0.016 on its standard error
+    close = nb06.halves_words(m)
+    assert "neither half is clearly the larger" in close and "standard error at most 0.030" in close
+    assert "the yaw half is the larger" in nb06.halves_words(metrics(yaw_frac=0.9))
+    assert "the position half is the larger" in nb06.halves_words(metrics(yaw_frac=0.1))
+    # beyond the noise (SEs of a thousandth) but 0.010 apart: below the minimum effect
+    tiny = nb06.halves_words(metrics(dream=-0.3, se=0.0005, yaw_frac=0.55))
+    assert "neither half is clearly the larger" in tiny
     opposite = nb06.halves_words(metrics(yaw_frac=1.5))                  # position half = -0.5 of the gap
-    assert "opposite signs" in opposite and "the yaw half is the larger" in opposite
+    assert "partly cancel" in opposite and "the yaw half is the larger" in opposite
+    cancel = nb06.halves_words(metrics(dream=-0.39, yaw_frac=10))         # +0.100 and -0.090: sum +0.010
+    assert "cancel almost exactly" in cancel and "25%" in cancel and "0.190" in cancel
+    assert "k = 2.05" in nb06.halves_rule(N) and "0.02." in nb06.halves_rule(N, short=True)
     assert nb06.yaw_share(m) == pytest.approx(0.6)
     assert math.isnan(nb06.yaw_share(metrics(dream=-0.4)))               # no gap, no share
 
@@ -388,7 +409,7 @@ def test_the_rounds_sentence_reads_halves_and_the_expert_per_round():
     for m, e in zip(rounds, (-0.065, 0.003, 0.011, 0.071)):
         m["expert_signal_dream_eval_horizon"] = e
     s = nb06.rounds_sentence(rounds)
-    assert "in every round, the block's angle, not its distance" in s
+    assert "A half counts as the larger only when" in s and "conservative" in s
     assert "round 0: -0.065 ± 0.019 (pays them less than standing still)" in s
     assert "round 1: +0.003 ± 0.019 (does not tell them from standing still)" in s
     assert "round 3: +0.071 ± 0.019 (pays them more than standing still)" in s
@@ -396,10 +417,23 @@ def test_the_rounds_sentence_reads_halves_and_the_expert_per_round():
     assert "the loop taught the model to pay the expert's pushes more" in s
     flat = nb06.rounds_sentence(loop([-0.215, -0.387]))
     assert "did not change what the model pays" in flat
-    pos = nb06.rounds_sentence(loop([-0.215, -0.387], yaw_frac=0.2))
-    assert "the larger half changes from round to round (yaw in round 0" in pos
-    assert "the block's distance to the target is the larger part" in nb06.rounds_sentence(
-        [dict(m, **{"imagination_gap_yaw_eval_horizon": 0.0}) for m in loop([-0.215, -0.387])])
+
+    def halves(*pairs):
+        rs = loop([-0.215] * len(pairs))
+        for m, (p, y) in zip(rs, pairs):
+            m.update(imagination_gap_position_eval_horizon=p, imagination_gap_yaw_eval_horizon=y,
+                     imagination_gap_se_position_eval_horizon=0.01, imagination_gap_se_yaw_eval_horizon=0.01)
+        return nb06.rounds_sentence(rs)
+
+    yaw, pos, neither = (0.05, 0.15), (0.15, 0.05), (0.11, 0.115)
+    assert "in every round, the block's angle, not its distance, is clearly the larger" in halves(yaw, yaw, yaw)
+    assert "the block's distance to the target is clearly the larger part" in halves(pos, pos)
+    assert "in no round is either half clearly the larger" in halves(neither, neither)
+    mixed = halves(yaw, pos, neither)
+    assert "changes from round to round: yaw in round 0, position in round 1, neither clearly in round 2" in mixed
+    part = halves(yaw, yaw, neither)
+    assert "the yaw half is clearly the larger in rounds 0, 1, and neither half is clearly the larger in round 2" \
+        in part and "changes from round to round" not in part
     t = nb06.rounds_table(rounds)
     assert "+0.074 ± 0.014 / +0.111 ± 0.016" in t and "+0.071 ± 0.019 | +0.168 ± 0.014 |" in t
 
@@ -418,6 +452,13 @@ def test_a_fix_needs_both_horizons_no_sign_flip_and_a_dream_on_the_table():
     flip = single(dream=-0.60, dream_tr=-0.395)                          # +0.185 -> -0.200: opposite error
     ok, text = nb06.fix_verdict(ref, flip, "X", "the state model")
     assert not ok and "changed sign beyond the noise" in text
+    # the gap reaches zero only because its halves cancel: +0.100 yaw, -0.090 position
+    cancel = single(dream=-0.39, dream_tr=-0.395, yaw_frac=10)
+    ok, text = nb06.fix_verdict(ref, cancel, "X", "the state model")
+    assert not ok and "over all 100 steps 0.185 -> 0.190 (did not fall" in text
+    assert "cancelling halves is not a fix" in text
+    ok, text = nb06.fix_verdict(ref, good, "X", "the state model")
+    assert "over all 100 steps 0.185 -> 0.010 (fell beyond the noise and the minimum effect: k = 2.05" in text
 
 
 def test_the_delta_sentence_flags_a_runaway_untouched_block():
@@ -486,7 +527,8 @@ def test_every_claim_takes_both_branches_somewhere():
     claims.LEDGER.clear()
     cases = [loop([-0.215, -0.214, -0.332, -0.387], touches=13, moved=0.05, moved_max=0.26, toward=-0.016),
              loop([-0.215, -0.100], successes=[0, 1], touches=2, moved=0.05, moved_max=0.06, toward=0.045),
-             loop([-0.215, -0.450], successes=[0, 9], touches=25, yaw_frac=0.2),
+             loop([-0.215, -0.450], successes=[0, 9], touches=25, yaw_frac=0.1),
+             loop([-0.215, -0.450], yaw_frac=0.9),
              loop([-0.215, -0.400, -0.300, -0.250], reals=[-0.4, -0.25, -0.3, -0.3], expert_dream=0.07,
                   training_tr=0.05, training_tr_se=0.01),
              loop([-0.215, -0.387], dream_tr=-0.395, training_tr=-0.05, training_tr_se=0.01, moved=0.0,
@@ -506,7 +548,7 @@ def test_every_claim_takes_both_branches_somewhere():
     worse = delta(zero_action_dream_final_tee_dist=0.8, replay_pusher_err_eval_horizon=0.1, drift=-0.2)
     worse["wm_one_step_ratio_agent_x"] = 1.2
     for d in (delta(), worse, delta(runaway=False, zero_action_dream_final_tee_dist=0.159),
-              single(dream=-0.39, dream_tr=-0.395)):
+              single(dream=-0.39, dream_tr=-0.395), single(dream=-0.39, dream_tr=-0.395, yaw_frac=10)):
         nb06.delta_sentence(single(), d)
     for e in (ensemble(), ensemble(dis=0.3), ensemble(dream=-0.5, dream_tr=-0.45, expert_dream=0.015,
                                                       expert_dream_se=0.001)):

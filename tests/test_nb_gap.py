@@ -149,6 +149,46 @@ def test_a_term_is_only_called_positive_beyond_twice_its_noise_and_the_minimum_e
     assert "only after the steps its gradient saw" in gap.split_story(m, 15)
     m["gap_drift_train_horizon"] = 0.0
     assert "not measurably rosier than reality over the" in gap.split_story(m, 15)
+    # the conflation the reviewer found: beyond k SE but under the minimum effect is its own branch
+    m = full_metrics(training=0.015, se=0.005)
+    s = gap.split_story(m, 15)
+    assert "beyond the noise" in s and "smaller than the minimum effect" in s and "within the noise" not in s
+    assert "beyond the noise" in gap.exploitation_text({3: m}, 15)
+    assert "beyond the noise but smaller" in gap.company_text(m, 15)
+    # exploitation within the horizon, a whole-run mean near zero: the steps after the horizon, measured
+    m = full_metrics(training=0.05)
+    m["gap_training_eval_horizon"] = -0.003
+    s = gap.split_story(m, 15)
+    assert "that advantage is gone from the whole run's mean" in s and "no rosier" not in s
+    assert f"k = {gap.k_se(30):.2f} standard errors" in s and "Student's t" in s
+
+
+def test_k_is_students_t_at_the_starts_degrees_of_freedom():
+    assert gap.k_se(30) == pytest.approx(2.045, abs=2e-3) and gap.K_SE == gap.k_se(30)
+    assert gap.k_se(4) == pytest.approx(3.18, abs=1e-2)
+    assert gap._k({"eval_episodes": 4}) == gap.k_se(4) and gap._k({}, n=4) == gap.k_se(4)
+    assert "k = 2.05 standard errors over the starts (Student's t, 95% two-sided)" in gap.ex1_note(30)
+
+
+def test_after_the_horizon_training_is_measured_on_its_own():
+    T, B = 20, 6
+    rng = np.random.default_rng(1)
+
+    def roll(level):
+        r = np.asarray(level, float)[:, None] + 0.001 * rng.standard_normal((T, B))
+        return _roll(np.zeros((T + 1, B, 2)), np.zeros((T + 1, B)), rewards=r)
+    flat = np.full(T, -0.3)
+    rosy_then_gloomy = np.r_[np.full(5, -0.2), np.full(T - 5, -0.4)]
+    rolls = {"dream_trained": roll(rosy_then_gloomy), "dream_untrained": roll(flat),
+             "real_trained": roll(flat), "real_untrained": roll(flat)}
+    v, se, n = gap.after_horizon_training(rolls, 5)
+    assert v == pytest.approx(-0.1, abs=2e-3) and se < 0.01 and n == B
+    m = full_metrics(training=0.05)
+    m["gap_training_eval_horizon"] = -0.003
+    s = gap.split_story(m, 5, rolls)
+    assert "steps 6 to 20" in s and "*gloomier*" in s and "reversed after it" in s
+    rolls["dream_trained"] = roll(np.r_[np.full(5, -0.2), np.full(T - 5, -0.3)])
+    assert "cannot tell the trained actor's dream" in gap.split_story(m, 5, rolls)
 
 
 def test_the_split_says_which_half_dominates():
@@ -162,6 +202,12 @@ def test_the_split_says_which_half_dominates():
     assert "**yaw** half" in gap.split_sentence(full_metrics(pos_share=0.2), "eval_horizon", 100)
     assert "**position** half" in gap.split_sentence(full_metrics(pos_share=0.8), "eval_horizon", 100)
     assert "Neither half" in gap.split_sentence(full_metrics(pos_share=0.5), "eval_horizon", 100)
+    # which condition failed, said
+    assert "is within the noise" in gap.dominance_sentence(full_metrics(pos_share=0.4), "eval_horizon")
+    assert "but smaller than the minimum effect" in gap.dominance_sentence(
+        full_metrics(pos_share=0.47, se=0.001), "eval_horizon")
+    assert "neither beyond" in gap.dominance_sentence(full_metrics(pos_share=0.49), "eval_horizon")
+    assert "is not positive" in gap.dominance_sentence(full_metrics(gap_=-0.2, pos_share=0.3), "eval_horizon")
     assert "of the gap)" in gap.split_sentence(full_metrics(), "eval_horizon", 100)       # shares when rosy
     assert "of the gap)" not in gap.split_sentence(full_metrics(gap_=0.0), "eval_horizon", 100)
 
@@ -247,8 +293,14 @@ def test_pusher_paths_text_compares_with_zero_actions():
 
     def trained(r):
         return _roll(np.broadcast_to(pos, (11, 4, 2)), np.zeros((11, 4)), rewards=np.asarray(r)[None].repeat(10, 0))
-    assert "no better than standing still" in gap.pusher_paths_text(
+    assert "within the noise" in gap.pusher_paths_text(
         m, {"real_trained": trained([-0.3, -0.301, -0.299, -0.3]), "real_zero": z}, 4, TOUCH_TOL)
+    # beyond the noise, under the minimum effect: detected, but not "no better than standing still"
+    s = gap.pusher_paths_text(m, {"real_trained": trained([-0.29, -0.2905, -0.2895, -0.29]), "real_zero": z},
+                              4, TOUCH_TOL)
+    assert "Detected, but too small to count as doing better" in s and "slightly more" in s
+    assert "no better than standing still" not in s and "within the noise" not in s
+    assert f"k = {gap.k_se(4):.2f}" in s and "Student's t" in s
     assert "clearly better" in gap.pusher_paths_text(
         m, {"real_trained": trained([-0.2, -0.21, -0.19, -0.2]), "real_zero": z}, 4, TOUCH_TOL)
     assert "clearly *worse*" in gap.pusher_paths_text(
@@ -263,9 +315,23 @@ def test_shift_sentence_branches():
          "real_final_block_spread": 0.15, "spawn_block_spread": 0.15}
     s = gap.shift_sentence(m)
     assert "has left the data" in s and "collapse" in s
+    assert "a resolution, not a test" in s
     m.update(replay_pusher_err_train_horizon=0.101, dream_final_block_spread=0.15)
     s = gap.shift_sentence(m)
-    assert "about as well" in s and "about as spread" in s
+    assert "about as well" in s and "not more than 5 mm less spread" in s and "a resolution, not a test" in s
+    # with the per-clip errors: Welch's t-test over the clips, minimum effect 5 mm
+    rng = np.random.default_rng(0)
+    exp = {"pusher": 0.10 + 0.01 * rng.standard_normal((20, 30))}
+    pol = {"pusher": 0.16 + 0.01 * rng.standard_normal((20, 30))}
+    s = gap.shift_sentence(m, replay=pol, expert_replay=exp)
+    assert "is beyond the noise and at least 5 mm" in s and "has left the data" in s and "Welch" in s
+    noisy = {"pusher": 0.16 + 0.5 * rng.standard_normal((20, 30))}
+    assert "is within the noise" in gap.shift_sentence(m, replay=noisy, expert_replay=exp)
+    tight = {"pusher": 0.10 + 0.001 * rng.standard_normal((20, 30))}
+    close = {"pusher": tight["pusher"] + 0.003}
+    assert "beyond the noise but under 5 mm" in gap.shift_sentence(m, replay=close, expert_replay=tight)
+    better = {"pusher": 0.04 + 0.01 * rng.standard_normal((20, 30))}
+    assert "*better*" in gap.shift_sentence(m, replay=better, expert_replay=exp)
 
 
 def test_every_claim_of_this_notebook_is_registered_and_keyword_only():

@@ -296,6 +296,9 @@ def _change_claims(name: str, what: str):
 IMAGINED = _change_claims("imagined", "the imagined reward per step (last 20 updates minus first 20)")
 REAL_FLOOR = _change_claims("real_floor", "the real floor (final policy minus untrained, on the monitor's starts)")
 WIRING_RISE = _change_claims("wiring_rise", "the imagined rise with Dreamer's wiring minus the rise with the page's")
+WIRING_FLOOR = _change_claims("wiring_floor", "the real floor's change with Dreamer's wiring minus the change with "
+                              "the page's (per start, on the monitor's starts)")
+OBJECTIVE = _change_claims("objective", "the mean lambda-return the actor maximises (last 20 updates minus first 20)")
 
 
 def verdict(test: Test, claims) -> str:
@@ -346,14 +349,20 @@ def real_floor(wm, run, cfg, mean, std) -> dict:
     run again on the monitor's own starts (``MONITOR_SEED_BASE``) for ``cfg.eval_horizon`` steps.
 
     The training history keeps only the mean over the starts; the per-start values give the
-    change its standard error. Returns {"first": (N,), "last": (N,)} reward per step.
+    change its standard error. Returns {"first": (N,), "last": (N,)} reward per step, and
+    {"moved_first", "moved_last": (N,)}: how far each start's block ever got from where it spawned (m).
     """
     from ..data import MONITOR_SEED_BASE, start_seeds
     from ..evaluate import policy_of, real_rollout
 
     seeds = start_seeds(MONITOR_SEED_BASE, cfg.seed, cfg.monitor_episodes)
-    return {end: real_rollout(wm, policy_of(agent), seeds, cfg.eval_horizon, mean, std).return_per_step
-            for end, agent in (("first", run.init_agent), ("last", run.agent))}
+    out = {}
+    for end, agent in (("first", run.init_agent), ("last", run.agent)):
+        roll = real_rollout(wm, policy_of(agent), seeds, cfg.eval_horizon, mean, std)
+        out[end] = roll.return_per_step
+        block = np.asarray(roll.obs)[:, :, 2:4]
+        out[f"moved_{end}"] = np.nanmax(np.linalg.norm(block - block[:1], axis=-1), axis=0)
+    return out
 
 
 def floor_test(floor: dict) -> Test:
@@ -400,12 +409,15 @@ def training_sentence(hist: dict, floor: dict | None = None) -> str:
           f"(standard error of the {n} per-start changes; the same starts before and after). {_WORDS[vr]} "
           f"({real.why()}.)")
     spread = floor_changes_spread(se=real.se)
-    if vr in ("same", "small") and spread:
+    c = changed_starts(floor)
+    mostly_same = floor_most_starts_unchanged(n_changed=c, n=n)
+    if vr in ("same", "small") and spread and not mostly_same:
         s += (f" With {n} starts, a change has to exceed about {_num(real.k * real.se)} per step "
               f"({real.k:.2f} standard errors) before this test can tell it from none.")
-    elif not spread:
+    elif not spread and c:
         s += (f" (All {n} per-start changes are equal, {real.diff:+.2g} each, so their spread gives no "
               "standard error, and the t-test cannot weigh it.)")
+    s += _unchanged_text(floor)
     mon = hist.get("monitor_real_reward")
     if mon is not None and len(mon) and not floor_reproduces_monitor(
             rerun=[r0, r1], monitor=[float(mon[0]), float(mon[-1])]):
@@ -447,6 +459,52 @@ def floor_changes_spread(*, se):
     return se > 0
 
 
+@claim("03.floor_most_starts_unchanged", "on most of the monitor's starts the real reward per step is "
+       "exactly the same before and after training")
+def floor_most_starts_unchanged(*, n_changed, n):
+    return n_changed < n / 2
+
+
+@claim("03.critic_loss_fell", "the critic's loss is lower over the last 20 updates than over the first 20")
+def critic_loss_fell(*, first, last):
+    return last < first
+
+
+@claim("03.unchanged_starts_untouched", "on every monitor start whose real reward did not change, neither "
+       "the untrained nor the trained policy moved the block (by more than 1 micrometre)")
+def unchanged_starts_untouched(*, moved):
+    return all(x <= 1e-6 for x in moved)
+
+
+def changed_starts(floor: dict) -> int:
+    """How many of the monitor's starts changed their real reward per step at all with training."""
+    d = np.asarray(floor["last"], dtype=float) - np.asarray(floor["first"], dtype=float)
+    return int(np.sum(d != 0))
+
+
+def _unchanged_text(floor: dict) -> str:
+    """How many of the monitor's starts changed at all, and what that leaves the test to weigh."""
+    n = len(floor["first"])
+    c = changed_starts(floor)
+    s = f" **{c} of the {n} starts changed at all**"
+    if not floor_most_starts_unchanged(n_changed=c, n=n):
+        return s + "; the rest gave exactly the same reward per step before and after training."
+    d = np.asarray(floor["last"], dtype=float) - np.asarray(floor["first"], dtype=float)
+    same = d == 0
+    s += (f": on {'every start' if c == 0 else f'the other {n - c}'} the reward per step is identical, to the last "
+          "digit, before and after training, so the block followed exactly the same path under both policies")
+    if "moved_first" in floor and "moved_last" in floor:
+        moved = [float(x) for x in np.r_[np.asarray(floor["moved_first"])[same], np.asarray(floor["moved_last"])[same]]]
+        if unchanged_starts_untouched(moved=moved):
+            s += ": neither policy's real pushes ever moved it"
+    if c == 0:
+        return s + ". The test above has nothing to weigh: training changed nothing the real reward can see here."
+    s += (f". The test above has almost nothing to weigh: its mean and its standard error come from the "
+          f"{c} start{'s' * (c != 1)} that changed, so read it as a count of starts, not as a measurement of the "
+          "policy's skill.")
+    return s
+
+
 @claim("03.floor_reproduces_monitor", "re-running the untrained and the trained policy on the monitor's "
        "starts reproduces the monitor's first and last means (to 1e-6 per step)")
 def floor_reproduces_monitor(*, rerun, monitor):
@@ -474,10 +532,15 @@ def _reading(vi: str, vr: str) -> str:
 
 
 def wiring_sentence(dreamer: dict, page: dict, dreamer_hist: dict | None = None,
-                    page_hist: dict | None = None) -> str:
-    """Compare the two wirings' runs (metrics and training history of each), on the measured numbers.
-    (Notebooks of an older release pass the two metrics only: the rises then come from the metrics,
-    :func:`metrics_rise_test`.)"""
+                    page_hist: dict | None = None, dreamer_floor: dict | None = None,
+                    page_floor: dict | None = None) -> str:
+    """Compare the two wirings' runs on what this notebook measures: the imagined rise of each
+    (training history, or the metrics alone), and, given each run's :func:`real_floor`, the real
+    floor's change of each and their difference, start by start. Nothing here reads the deployed
+    evaluation (notebook 04's subject).
+
+    Notebooks of an older release pass the two metrics only: the rises then come from the metrics
+    (:func:`metrics_rise_test`), and the real floor is not compared."""
     d = rise_test(dreamer_hist) if dreamer_hist is not None else metrics_rise_test(dreamer)
     p = rise_test(page_hist) if page_hist is not None else metrics_rise_test(page)
     se = float(np.hypot(d.se, p.se))
@@ -486,9 +549,9 @@ def wiring_sentence(dreamer: dict, page: dict, dreamer_hist: dict | None = None,
     diff = Test(d.diff - p.diff, se, df, k, outcome(d.diff - p.diff, k * se, MIN_REWARD_EFFECT),
                 MIN_REWARD_EFFECT, "Welch's t-test on the difference of the two rises")
     v = verdict(diff, WIRING_RISE)
-    s = (f"With the critic reaching the actor (Dreamer's wiring) the imagined reward per step changed by "
-         f"**{d.diff:+.3f}** (± {d.se:.3f}) over training; with the page's wiring, where the actor sees only "
-         f"the dreamed rewards, by **{p.diff:+.3f}** (± {p.se:.3f}). The difference, **{diff.diff:+.3f} ± "
+    s = (f"**In the dream.** With the critic reaching the actor (Dreamer's wiring) the imagined reward per step "
+         f"changed by **{d.diff:+.3f}** (± {d.se:.3f}) over training; with the page's wiring, where the actor sees "
+         f"only the dreamed rewards, by **{p.diff:+.3f}** (± {p.se:.3f}). The difference, **{diff.diff:+.3f} ± "
          f"{se:.3f}**: ")
     s += {"up": "Dreamer's wiring raised the imagined reward more, beyond the noise and by at least the "
                 "minimum effect. ",
@@ -498,15 +561,36 @@ def wiring_sentence(dreamer: dict, page: dict, dreamer_hist: dict | None = None,
                    "are not read as different here. ",
           "same": "within the noise: this run cannot tell the two wirings apart on the imagined reward. "}[v]
     s += f"({diff.why()}.) "
-    gd, gp = dreamer["imagination_gap"], page["imagination_gap"]
-    sd, sp = dreamer.get("imagination_gap_se_eval_horizon"), page.get("imagination_gap_se_eval_horizon")
-    pm = (lambda x: f" ± {x:.3f}" if x is not None else "")
     s += ("Keep in mind what each one maximises: the page's actor pushes only the rewards of its "
           f"{dreamer['imag_horizon']} dreamed steps, Dreamer's pushes the lambda-return, in which the "
-          "critic's values stand for everything after them. Deployed for the full evaluation, the gap "
-          f"(dream minus real, per step) is **{gd:+.3f}**{pm(sd)} with Dreamer's wiring and "
-          f"**{gp:+.3f}**{pm(sp)} with the page's; real success is {dreamer['real_success_rate']:.0%} and "
-          f"{page['real_success_rate']:.0%}. Notebook 04 takes such a gap apart.")
+          "critic's values stand for everything after them.")
+    if dreamer_floor is None or page_floor is None:
+        return s
+    s += "\n\n**On the monitor's real starts.** "
+    for name, fl in (("Dreamer's wiring", dreamer_floor), ("the page's wiring", page_floor)):
+        t = floor_test(fl)
+        vr = verdict(t, REAL_FLOOR)
+        s += (f"With {name} the real floor changed by **{t.diff:+.3f} ± {_num(t.se)}** per step "
+              f"({changed_starts(fl)} of {len(fl['first'])} starts changed at all; "
+              + {"up": "a rise", "down": "a fall", "small": "beyond the noise but under the minimum effect",
+                 "same": "within the noise"}[vr] + "). ")
+    a = np.asarray(dreamer_floor["last"], float) - np.asarray(dreamer_floor["first"], float)
+    b = np.asarray(page_floor["last"], float) - np.asarray(page_floor["first"], float)
+    if len(a) == len(b) and len(a) > 1:
+        t = sign_test(a - b, min_effect=MIN_REWARD_EFFECT)
+        vw = verdict(t, WIRING_FLOOR)          # evaluated on every run, so the claims are recorded
+    if len(a) == len(b) and len(a) > 1 and np.ptp(a - b) > 0:
+        s += (f"Dreamer's minus the page's, start by start: **{t.diff:+.3f} ± {_num(t.se)}**: " + {
+            "up": "Dreamer's wiring raised the real floor more, beyond the noise and by at least the minimum effect",
+            "down": "the page's wiring raised the real floor more, beyond the noise and by at least the minimum effect",
+            "small": "beyond the noise, but smaller than the minimum effect that matters",
+            "same": "within the noise: on these few starts the two wirings cannot be told apart in reality"}[vw]
+              + f" ({t.why()}). ")
+    else:
+        s += ("The two wirings' per-start changes differ by the same amount on every start (or not at all), so "
+              "there is no spread to test their difference against. ")
+    s += ("These are the monitor's few starts, a first hint; notebook 04 deploys a policy in both worlds on "
+          "held-out starts.")
     return s
 
 
@@ -597,7 +681,7 @@ def reach_reading(reach: dict, yours: str = "your losses", page: str = "the page
     s = []
     if your_actor_reaches_critic_weights(norm=y["actor loss", "critic's weights"]):
         s.append("Your actor loss has a gradient on the **critic's weights**: the values in its return are "
-                 "computed by the critic. The loop never applies it: `set_gradients` (next cell) takes the "
+                 "computed by the critic. The loop never applies it: `set_gradients` (shown above) takes the "
                  "actor loss's gradient with respect to the actor's weights only. One summed `backward()` "
                  "would put it on the critic, and teach the critic to raise its own values.")
     else:
@@ -623,6 +707,45 @@ def reach_reading(reach: dict, yours: str = "your losses", page: str = "the page
         s.append("With the page's losses the actor loss does send gradient into the states through the "
                  "values, which its detached values should rule out.")
     return " ".join(s)
+
+
+def objective_sentence(hist: dict, horizon: int) -> str:
+    """Read the "What the actor maximises" panel: did the mean lambda-return fall while the imagined
+    reward did not, and why that is the critic learning, not the actor getting worse (claims).
+
+    The minimum effect for the return is MIN_REWARD_EFFECT times ``horizon``: the change of the
+    return if each of the ``horizon`` dreamed rewards changed by the minimum effect."""
+    g = np.asarray(hist["imag_return"], dtype=float)
+    n = min(20, len(g) // 2)
+    obj = welch(g[:n], g[-n:], min_effect=MIN_REWARD_EFFECT * horizon)
+    vo, vi = verdict(obj, OBJECTIVE), verdict(rise_test(hist), IMAGINED)
+    s = (f"The middle panel, the mean lambda-return the actor maximises, went from **{g[:n].mean():+.2f}** (first "
+         f"{n} updates) to **{g[-n:].mean():+.2f}** (last {n}): **{obj.diff:+.3f} ± {_num(obj.se)}** ({obj.why()}, "
+         f"the return of {horizon} dreamed rewards each changed by {MIN_REWARD_EFFECT:.2f}). ")
+    if vo == "down" and vi != "down":
+        s += ("It **fell**, while the imagined reward per step "
+              + {"up": "rose", "small": "barely moved", "same": "did not measurably move"}[vi]
+              + (". That is not the actor getting worse. The lambda-return is the dreamed rewards *plus the "
+                 "critic's values* (at the horizon, and with weight 1 - lam at every step), and the critic is "
+                 "learning too: it starts as an untrained network that knows nothing of PushT's rewards (the "
+                 "lambda-return figure above showed one), and it learns that returns here are negative, since every "
+                 "reward is at most 0. As its values fall toward the true returns, they pull the lambda-return down "
+                 "with them. So the panel mostly tracks the critic learning what the returns are, and the imagined "
+                 "reward is the actor's own progress."))
+        cl = np.asarray(hist.get("critic_loss", []), dtype=float)
+        if len(cl) >= 2 and critic_loss_fell(first=float(cl[:n].mean()), last=float(cl[-n:].mean())):
+            s += (f" The left panel shows the critic learning: its loss fell from {cl[:n].mean():.3g} to "
+                  f"{cl[-n:].mean():.3g} (means of the first and last {n} updates).")
+    elif vo == "down":
+        s += ("It fell, and so did the imagined reward per step: the dreamed rewards inside it fell, whatever the "
+              "critic's values did.")
+    elif vo == "up":
+        s += ("It rose: the dreamed rewards and the critic's values inside it rose together, or one more than the "
+              "other fell.")
+    else:
+        s += ("That is " + ("beyond the noise but smaller than the minimum effect" if vo == "small" else
+                            "within the noise") + ": the panel shows no change that matters.")
+    return s
 
 
 def carry_forward(hist: dict, floor: dict) -> str:
@@ -660,7 +783,7 @@ def fig_lambda_returns(returns_by_lam: dict, train_lam: float, n_dreams: int):
         ax.plot(np.arange(len(G)), G, style, lw=2, marker="o", ms=3,
                 label=f"lam = {lam:g}" + (" (training)" if lam == train_lam else ""))
     ax.set_xlabel("dreamed step t")
-    ax.set_ylabel("lambda-return $G_t$\n(discounted sum of reward per step)")
+    ax.set_ylabel("lambda-return $G_t$ (reward units):\ndiscounted dreamed rewards from t on\n+ the critic's values")
     ax.set_title(f"Your lambda-return on {n_dreams} dreams, untrained critic (mean over dreams)")
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -746,7 +869,7 @@ SELF_CHECKS = {
              "on a tape of its own whose gradient only the value model's optimiser applies "
              "(`danijar/dreamer`, `Dreamer._train`). (b) is what happens in a loop that sums both losses "
              "into one `backward()` (one optimiser for both networks): every gradient then lands on "
-             "every parameter it reaches. The next cell measures both set-ups on your losses. Keep the detach anyway: "
+             "every parameter it reaches. The cells below measure both set-ups on your losses. Keep the detach anyway: "
              "it makes the critic loss safe under either set-up, and costs nothing."),
     "page_wiring": Question(
         "Under the chapter page's wiring (values detached inside the actor's return), what does "
@@ -755,7 +878,7 @@ SELF_CHECKS = {
               "critic by zeros gives the same actor",
          "b": "The value of the states beyond the horizon, through V_H",
          "c": "Only the sign of the advantage"},
-        "a", "A detached value is a constant to the actor's gradient. The perturbation test above "
+        "a", "A detached value is a constant to the actor's gradient. The perturbation test below "
              "checks exactly this: it changes the critic's weights and compares the page's actor "
              "gradient before and after."),
     "what_rises": Question(
@@ -765,6 +888,6 @@ SELF_CHECKS = {
          "b": "Nothing yet: it measures the policy against the dream's picture of the block, which "
               "is the very thing the actor is free to exploit",
          "c": "That the world model is accurate"},
-        "b", "Only a measurement in reality can say: the real floor above gives a first, noisy one, and "
+        "b", "Only a measurement in reality can say: the real floor below gives a first, noisy one, and "
              "notebook 04 makes it on identical starts in both worlds."),
 }

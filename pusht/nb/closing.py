@@ -44,7 +44,17 @@ why they are what they are):
   standard errors (:func:`displacement_se_bound`, :func:`toward_se_bound`); a change counts beyond
   k of these bounds. Conservative again: a real change may go uncalled, a called one is real.
 * **The world model's errors** (RMSE in metres over many clips) carry no standard error either.
-  ``ERR_RES``: a change of an error counts when it exceeds 1 mm.
+  ``ERR_RES``: a change of an error counts when it exceeds 1 mm. That is a resolution, not a test:
+  the sentences say so.
+* **Which half of a gap is the larger.** A half is "the larger" only when the difference of the
+  sizes, |yaw| - |position|, exceeds k standard errors and is at least the minimum reward effect
+  (:func:`halves_order`); otherwise neither half is clearly the larger. The metrics keep each
+  half's standard error but not their covariance, so the difference's standard error is bounded by
+  se_position + se_yaw (the standard error of a difference is at most the sum of the two):
+  conservative. The same bound serves the **size of the error**, |position| + |yaw| (the gap can
+  reach zero with both halves large and of opposite signs: they cancel): a fix must shrink it too
+  (:func:`fix_verdict`). Two halves **cancel almost exactly** when they have opposite signs and
+  their sum is less than ``CANCEL_SHARE`` (a quarter) of |position| + |yaw|.
 * ``ARENA``: a dreamed pusher farther from the real one than the arena is wide is off the table.
 """
 
@@ -72,6 +82,10 @@ ERR_RES = 1e-3
 # can no longer be anywhere on the table.
 ARENA = 2 * ARENA_HALF
 COUNT_P = (1 - LEVEL) / 2          # one-sided bar for a count's rise (see the module doc)
+# Two halves of opposite signs "cancel almost exactly" when what is left of them, |position + yaw|,
+# is less than a quarter of their sizes added, |position| + |yaw|: three quarters or more of the
+# error is hidden from the gap.
+CANCEL_SHARE = 0.25
 WORLD_COLORS = {"dream": "tab:purple", "real": "tab:orange"}
 DATA_COLORS = {"policy": "tab:red", "expert": "tab:blue"}
 DATA_LABELS = {"policy": "the policy's data", "expert": "held-out expert data"}
@@ -169,9 +183,33 @@ def dream_gloomier(*, value, se, k, min_effect):
     return value < -k * se and -value >= min_effect
 
 
-@claim("06.yaw_half_larger", "the yaw half of the gap is larger in size than the position half")
-def yaw_half_larger(*, position, yaw):
-    return abs(yaw) > abs(position)
+@claim("06.yaw_half_clearly_larger", "the yaw half of the gap is larger in size than the position half, by more "
+       "than k times a bound on the standard error of the difference (se_position + se_yaw) and by at least "
+       "the minimum effect")
+def yaw_half_clearly_larger(*, position, yaw, se_position, se_yaw, k, min_effect):
+    diff = abs(yaw) - abs(position)
+    return diff > k * (se_position + se_yaw) and diff >= min_effect
+
+
+@claim("06.position_half_clearly_larger", "the position half of the gap is larger in size than the yaw half, by "
+       "more than k times a bound on the standard error of the difference (se_position + se_yaw) and by at "
+       "least the minimum effect")
+def position_half_clearly_larger(*, position, yaw, se_position, se_yaw, k, min_effect):
+    diff = abs(position) - abs(yaw)
+    return diff > k * (se_position + se_yaw) and diff >= min_effect
+
+
+@claim("06.halves_cancel", "the two halves have opposite signs and their sum is less than a given share of their "
+       "sizes added: they cancel almost exactly")
+def halves_cancel(*, position, yaw, share):
+    return position * yaw < 0 and abs(position + yaw) < share * (abs(position) + abs(yaw))
+
+
+@claim("06.error_size_shrank", "the size of the error, |position half| + |yaw half|, fell by more than k times the "
+       "bound on the standard error of the change and by at least the minimum effect")
+def error_size_shrank(*, first, first_bound, last, last_bound, k, min_effect):
+    drop = first - last
+    return drop > k * math.sqrt(first_bound ** 2 + last_bound ** 2) and drop >= min_effect
 
 
 @claim("06.dream_rewards_expert", "the dream pays the scripted expert's actions more than zero actions, beyond k "
@@ -438,15 +476,69 @@ def yaw_share(m: dict, span: str = "eval_horizon") -> float:
     return abs(y) / tot if tot > 0 else math.nan
 
 
-def halves_words(m: dict, span: str = "eval_horizon") -> str:
-    """"+0.073 ± 0.010 position and +0.112 ± 0.012 yaw: the yaw half is the larger" (claim
-    ``06.yaw_half_larger``), with a note when the two halves pull opposite ways."""
+def halves_order(position: float, yaw: float, se_position: float, se_yaw: float, n_starts: int) -> str:
+    """"yaw", "position" or "neither": which half of a gap is clearly the larger in size (claims
+    ``06.yaw_half_clearly_larger``/``06.position_half_clearly_larger``): |yaw| - |position| beyond k
+    times se_position + se_yaw (a bound on the difference's standard error; the module doc says why)
+    and at least the minimum reward effect."""
+    kw = dict(position=position, yaw=yaw, se_position=se_position, se_yaw=se_yaw, k=k_for(int(n_starts)),
+              min_effect=MIN_REWARD_EFFECT)
+    return "yaw" if yaw_half_clearly_larger(**kw) else "position" if position_half_clearly_larger(**kw) else "neither"
+
+
+def _order(m: dict, span: str = "eval_horizon") -> str:
     p, pse, y, yse = _halves(m, span)
-    larger = "yaw" if yaw_half_larger(position=p, yaw=y) else "position"
-    s = f"{_pm(p, pse)} from the block's position and {_pm(y, yse)} from its yaw: the {larger} half is the larger"
+    return halves_order(p, y, pse, yse, int(m["eval_episodes"]))
+
+
+def error_size(m: dict, span: str = "eval_horizon") -> tuple[float, float]:
+    """The size of the dream's error over ``span``, |position half| + |yaw half| of the gap (what a
+    gap near zero can hide when the halves cancel), and a bound on its standard error,
+    se_position + se_yaw."""
+    p, pse, y, yse = _halves(m, span)
+    return abs(p) + abs(y), pse + yse
+
+
+ORDER_WORDS = {"yaw": "the yaw half is the larger", "position": "the position half is the larger",
+               "neither": "neither half is clearly the larger"}
+
+
+def halves_rule(n_starts: int, short: bool = False) -> str:
+    """The rule behind "the larger half", in one sentence (``short``: a parenthesis), for a reader."""
+    if short:
+        return (f"A half counts as the larger only beyond k = {k_for(int(n_starts)):.2f} times se_position + "
+                f"se_yaw, a bound on the standard error of the difference, and by at least "
+                f"{MIN_REWARD_EFFECT:.2f}.")
+    return (f"A half counts as the larger only when its size exceeds the other's by more than k = "
+            f"{k_for(int(n_starts)):.2f} times se_position + se_yaw and by at least the minimum effect of "
+            f"{MIN_REWARD_EFFECT:.2f} per step; otherwise neither half is clearly the larger. The sum of the two "
+            "standard errors bounds the standard error of their difference from above (the metrics keep each "
+            "half's standard error, not how the two vary together), so this test is conservative.")
+
+
+def _cancel_words(p: float, y: float) -> str:
+    """A note when the two halves have opposite signs: they cancel almost exactly (claim
+    ``06.halves_cancel``) or partly."""
+    size = abs(p) + abs(y)
+    if halves_cancel(position=p, yaw=y, share=CANCEL_SHARE):
+        return (f" (the two halves have opposite signs and cancel almost exactly: their sum, {p + y:+.3f}, is less "
+                f"than {CANCEL_SHARE:.0%} of their sizes added, {size:.3f}, so a gap near zero here hides an error "
+                "of that size)")
     if p * y < 0:
-        s += " (the two halves have opposite signs and partly cancel)"
-    return s
+        return (f" (the two halves have opposite signs and partly cancel: their sum is {p + y:+.3f}, their sizes "
+                f"added {size:.3f})")
+    return ""
+
+
+def halves_words(m: dict, span: str = "eval_horizon") -> str:
+    """"+0.073 ± 0.010 from the block's position and +0.112 ± 0.012 from its yaw (|yaw| - |position| =
+    +0.039, standard error at most 0.022): the yaw half is the larger" (:func:`halves_order`), with a
+    note when the two halves pull opposite ways (:func:`_cancel_words`). The rule: :func:`halves_rule`."""
+    p, pse, y, yse = _halves(m, span)
+    order = halves_order(p, y, pse, yse, int(m["eval_episodes"]))
+    s = (f"{_pm(p, pse)} from the block's position and {_pm(y, yse)} from its yaw (|yaw| - |position| = "
+         f"{abs(y) - abs(p):+.3f}, standard error at most {_se(pse + yse)}): {ORDER_WORDS[order]}")
+    return s + _cancel_words(p, y)
 
 
 def expert_words(m: dict, span: str = "eval_horizon") -> tuple[str, str]:
@@ -616,8 +708,8 @@ def rounds_table(rounds: list) -> str:
 
 
 def rounds_sentence(rounds: list) -> str:
-    """Per round: the gap's position and yaw halves and which is the larger (claim
-    ``06.yaw_half_larger``), at both horizons for the first and last round; and the expert control:
+    """Per round: the gap's position and yaw halves and which is clearly the larger (:func:`halves_order`),
+    the rule once, whether the larger half changes between rounds (only where it is resolved in both), at both horizons for the first and last round; and the expert control:
     does the dream recognise success in each round, and did the loop teach the model to reward the
     expert's pushes (claims ``06.dream_rewards_expert``, ``06.change_up``/``_down`` on its change)?"""
     first, last = rounds[0], rounds[-1]
@@ -627,18 +719,31 @@ def rounds_sentence(rounds: list) -> str:
              f"step, ± one standard error): {per}."]
     lines.append(f"Over {_steps(last, 'train_horizon')}, round 0: {halves_words(first, 'train_horizon')}; after "
                  f"round {R}: {halves_words(last, 'train_horizon')}.")
-    yaw_rounds = [m["round"] for m in rounds
-                  if yaw_half_larger(position=_halves(m)[0], yaw=_halves(m)[2])]
-    if len(yaw_rounds) == len(rounds):
-        lines.append(f"Over {_steps(last, 'eval_horizon')}, in every round, the block's angle, not its distance, "
-                     "is the larger part of the gap: a figure of where the block sits shows only the smaller half.")
-    elif not yaw_rounds:
-        lines.append(f"Over {_steps(last, 'eval_horizon')}, in every round, the block's distance to the target is "
-                     "the larger part of the gap.")
+    lines.append(halves_rule(int(last["eval_episodes"])))
+    order = {m["round"]: _order(m) for m in rounds}
+
+    def named(kind):
+        rs = [str(r) for r, o in order.items() if o == kind]
+        return ("round " if len(rs) == 1 else "rounds ") + ", ".join(rs)
+
+    kinds = set(order.values())
+    span = _steps(last, "eval_horizon")
+    if kinds == {"yaw"}:
+        lines.append(f"Over {span}, in every round, the block's angle, not its distance, is clearly the larger part "
+                     "of the gap: a figure of where the block sits shows only the smaller half.")
+    elif kinds == {"position"}:
+        lines.append(f"Over {span}, in every round, the block's distance to the target is clearly the larger part "
+                     "of the gap.")
+    elif kinds == {"neither"}:
+        lines.append(f"Over {span}, in no round is either half clearly the larger.")
+    elif {"yaw", "position"} <= kinds:
+        lines.append(f"Over {span} the larger half changes from round to round: yaw in {named('yaw')}, position in "
+                     f"{named('position')}" + (f", neither clearly in {named('neither')}" if "neither" in kinds
+                                               else "") + ".")
     else:
-        lines.append(f"Over {_steps(last, 'eval_horizon')} the larger half changes from round to round (yaw in "
-                     "round" + ("s " if len(yaw_rounds) > 1 else " ") + ", ".join(str(r) for r in yaw_rounds)
-                     + ", position in the others).")
+        one = (kinds - {"neither"}).pop()
+        lines.append(f"Over {span} the {one} half is clearly the larger in {named(one)}, and neither half is clearly "
+                     f"the larger in {named('neither')}: where one half is resolved, it is the same one.")
     short = {}
     for m in rounds:
         n = int(m["eval_episodes"])
@@ -709,7 +814,8 @@ def model_error_sentence(rounds: list) -> str:
     errors' overall direction."""
     R = rounds[-1]["round"]
     idx = [m["round"] for m in rounds[1:]]
-    out = []
+    out = [f"Below, an error \"fell\" or \"rose\" when it changed by more than {_mm(ERR_RES)}: a resolution, not a "
+           "test against the noise (the metrics keep no spread for these errors, each an RMSE over many clips)."]
     for data in ("policy", "expert"):
         parts = []
         for part in ("block", "pusher"):
@@ -833,23 +939,28 @@ def block_sentence(rounds: list) -> str:
     t0, t1 = int(first["real_episodes_touching_block"]), int(last["real_episodes_touching_block"])
     touches = ", ".join(f"{int(m['real_episodes_touching_block'])}" for m in rounds)
     s += f"The pusher touched the block in {touches} of {n} evaluation episodes"
-    if t1 > t0:
-        p = count_rise_p(t0, t1, n)
-        s += (f" (a rise {'beyond chance' if count_beyond_chance(p=p, bar=COUNT_P) else 'that could be chance'}: "
-              f"Fisher's one-sided p = {p:.3f}). ")
-    elif t1 < t0:
-        p = count_rise_p(t1, t0, n)
-        s += (f" (a fall {'beyond chance' if count_beyond_chance(p=p, bar=COUNT_P) else 'that could be chance'}: "
-              f"Fisher's one-sided p = {p:.3f}). ")
+    fisher = ("Fisher's exact test, one-sided, against {bar}, treats the two rounds as independent samples; they "
+              "used the same starts, and a paired test (McNemar's) would need which starts touched in each round, "
+              "which the metrics do not keep, so this p is an approximation").format(bar=f"{COUNT_P:.3f}")
+    if t1 != t0:
+        lo, hi = sorted((t0, t1))
+        p = count_rise_p(lo, hi, n)
+        s += (f" (round 0 to round {R}: a {'rise' if t1 > t0 else 'fall'} "
+              f"{'beyond chance' if count_beyond_chance(p=p, bar=COUNT_P) else 'that could be chance'}, p = {p:.3f}; "
+              f"{fisher}). ")
     else:
         s += ". "
-    c = compare(first["real_block_displacement"], displacement_se_bound(first), last["real_block_displacement"],
-                displacement_se_bound(last), n)
+    b0, b1 = displacement_se_bound(first), displacement_se_bound(last)
+    c = compare(first["real_block_displacement"], b0, last["real_block_displacement"], b1, n,
+                min_effect=SUCCESS_POS)
     s += (f"The block moved a mean {first['real_block_displacement']:.3f} m in round 0 and "
           f"{last['real_block_displacement']:.3f} m after round {R} (at most "
-          f"{last['real_block_displacement_max']:.3f} m): "
-          + {"up": "more, beyond the noise. ", "down": "less, beyond the noise. ",
-             "same": "not told apart by these starts. "}[c.direction()])
+          f"{last['real_block_displacement_max']:.3f} m), a change of {c.diff:+.3f} m: "
+          + {"up": "more, beyond the noise and the minimum effect", "down": "less, beyond the noise and the minimum "
+             "effect", "same": "not told apart by these starts"}[c.direction()]
+          + f" (a t-test on the two means against k = {c.k:.2f} times {c.se:.3f} m, an upper bound on the standard "
+          "error of the change built from each round's largest displacement, and a minimum effect of "
+          f"{SUCCESS_POS:.2f} m, the success tolerance). ")
     t = last["real_block_toward_target"]
     bound = toward_se_bound(last)
     out = toward_outcome(last)
@@ -916,8 +1027,10 @@ def fix_verdict(ref: dict, fix: dict, name: str, ref_name: str) -> tuple[bool, s
     """Does ``fix`` count as a fix against ``ref``? Claim ``06.fix_closed_gap``: the gap's size shrank
     at both horizons, beyond k standard errors of the change and by at least ``MIN_REWARD_EFFECT``,
     without crossing zero beyond the noise, and the fix's zero-action dream keeps the untouched block
-    on the table (``zero_action_dream_final_tee_dist`` at most ``ARENA_HALF``). Returns the verdict
-    and a sentence with each condition's numbers."""
+    on the table (``zero_action_dream_final_tee_dist`` at most ``ARENA_HALF``); and claim
+    ``06.error_size_shrank`` at both horizons: the size of the error, |position half| + |yaw half|
+    (:func:`error_size`), fell the same way, so halves that cancel do not pass for a fix. Returns the
+    verdict and a sentence with each condition's numbers."""
     parts = []
     changes = {}
     for span in SPAN_KEYS:
@@ -933,13 +1046,27 @@ def fix_verdict(ref: dict, fix: dict, name: str, ref_name: str) -> tuple[bool, s
              + ("within" if on_table else "farther than")
              + f" the {ARENA_HALF:.1f} m from the target to the nearest wall")
     tr, ev = changes["train_horizon"], changes["eval_horizon"]
-    holds = fix_closed_gap(first_tr=tr.first, first_tr_se=tr.first_se, last_tr=tr.last, last_tr_se=tr.last_se,
-                           first_ev=ev.first, first_ev_se=ev.first_se, last_ev=ev.last, last_ev_se=ev.last_se,
-                           k=ev.k, min_effect=ev.min_effect, final_dist=zd, arena_half=ARENA_HALF)
+    closed = fix_closed_gap(first_tr=tr.first, first_tr_se=tr.first_se, last_tr=tr.last, last_tr_se=tr.last_se,
+                            first_ev=ev.first, first_ev_se=ev.first_se, last_ev=ev.last, last_ev_se=ev.last_se,
+                            k=ev.k, min_effect=ev.min_effect, final_dist=zd, arena_half=ARENA_HALF)
+    sizes = []
+    shrank_all = True
+    for span in SPAN_KEYS:
+        (a, ab), (b, bb) = error_size(ref, span), error_size(fix, span)
+        fell = error_size_shrank(first=a, first_bound=ab, last=b, last_bound=bb, k=ev.k, min_effect=ev.min_effect)
+        shrank_all = shrank_all and fell
+        sizes.append(f"over {_steps(fix, span)} {a:.3f} -> {b:.3f} ("
+                     + ("fell" if fell else "did not fall") + " beyond the noise and the minimum effect: k = "
+                     f"{ev.k:.2f} times {math.sqrt(ab ** 2 + bb ** 2):.3f}, a bound on the change's standard error, "
+                     f"and {MIN_REWARD_EFFECT:.2f})")
+    holds = closed and shrank_all
     verdict = (f"{name} counts as a fix of the gap" if holds else f"{name} does not count as a fix of the gap")
-    text = (f"{verdict}: against {ref_name} its gap went " + "; ".join(parts) + f", and {table}. A fix needs "
-            f"the gap's size to fall at both horizons, beyond the noise and by at least {MIN_REWARD_EFFECT:.2f} per "
-            "step, without crossing zero, and a dream that keeps an untouched block on the table.")
+    text = (f"{verdict}: against {ref_name} its gap went " + "; ".join(parts) + f", and {table}. The size of the "
+            "dream's error, |position half| + |yaw half|, which a gap near zero can hide when the halves cancel, "
+            "went " + "; ".join(sizes) + ". A fix needs the gap's size to fall at both horizons, beyond the noise "
+            f"and by at least {MIN_REWARD_EFFECT:.2f} per step, without crossing zero, the size of the error to fall "
+            "the same way (a gap that reaches zero by cancelling halves is not a fix), and a dream that keeps an "
+            "untouched block on the table.")
     return holds, text
 
 
@@ -969,7 +1096,7 @@ def delta_sentence(state_m: dict, delta_m: dict) -> str:
         words[span] = _sign_word(g, se, k)
         s += (f"Over {_steps(delta_m, span)} its gap is {_pm(g, se)} ({words[span]}; the state model "
               f"{gs:+.3f}). ")
-    s += f"Over the whole evaluation its gap is {halves_words(delta_m)}. "
+    s += f"Over the whole evaluation its gap is {halves_words(delta_m)}. {halves_rule(n, short=True)} "
     mood = {"rosier than reality": "rosy", "gloomier than reality": "gloomy"}
     w_tr, w_ev = words["train_horizon"], words["eval_horizon"]
     if {w_tr, w_ev} == set(mood):
@@ -1017,11 +1144,18 @@ def shared_bias(*, disagreement, error):
     return disagreement < error
 
 
-def ensemble_sentence(single_m: dict, ens_m: dict, penalty: float | None = None) -> str:
+TRAIN_TAIL = 20    # the last iterations of the actor's training, as metrics.json's final imagined reward
+
+
+def ensemble_sentence(single_m: dict, ens_m: dict, penalty: float | None = None, train_disagreement=None) -> str:
     """The ensemble (with MOPO's penalty) against the single model: its gap at both horizons (and its
     halves), real return and successes, its members' disagreement (m) against its error from
     reality, the expert control, and whether it counts as a fix (:func:`fix_verdict`).
-    ``penalty``: the run's ``disagreement_penalty`` (reward per step per metre), if known."""
+    ``penalty``: the run's ``disagreement_penalty`` (reward per step per metre), if known;
+    ``train_disagreement``: the run's ``history["imag_disagreement"]`` (the members' mean disagreement
+    over each training iteration's dreams, m), if known: what the penalty cost the actor is read
+    from its last ``TRAIN_TAIL`` iterations. Without it, the cost is read from the evaluation dream,
+    and the sentence says so."""
     n = int(ens_m["eval_episodes"])
     s = ""
     for span in SPAN_KEYS:
@@ -1032,7 +1166,7 @@ def ensemble_sentence(single_m: dict, ens_m: dict, penalty: float | None = None)
         s += (f"Over {_steps(ens_m, span)} the ensemble's gap is {_pm(c.last, ens_m[f'imagination_gap_se_{span}'])} "
               f"against the single model's {_pm(c.first, single_m[f'imagination_gap_se_{span}'])}: "
               f"{c.diff:+.3f}, {word} ({_ratio_words(c)}; minimum effect {c.min_effect:.2f}). ")
-    s += f"Over the whole evaluation its gap is {halves_words(ens_m)}. "
+    s += f"Over the whole evaluation its gap is {halves_words(ens_m)}. {halves_rule(n, short=True)} "
     sd = sides(single_m, ens_m)
     s += (f"Reality pays its policy {ens_m[_real_key('eval_horizon')]:+.3f} per step, the single model's "
           f"{single_m[_real_key('eval_horizon')]:+.3f} ({sd['real']:+.3f}; "
@@ -1043,23 +1177,39 @@ def ensemble_sentence(single_m: dict, ens_m: dict, penalty: float | None = None)
         return s + "These metrics hold no ensemble disagreement (a single model has none)."
     dis_tr, dis_ev = ens_m["wm_ensemble_disagreement_train_horizon"], ens_m["wm_ensemble_disagreement_eval_horizon"]
     err_tr, err_ev = ens_m["replay_block_err_train_horizon"], ens_m["replay_block_err_eval_horizon"]
-    s += (f"Along its policy's evaluation dream the members disagree on where the block is by {dis_tr:.3f} m on "
-          f"average over {_steps(ens_m, 'train_horizon')} and {dis_ev:.3f} m over {_steps(ens_m, 'eval_horizon')}; "
-          f"their mean dream, replaying the policy's real actions, has the block {err_tr:.3f} m off reality at the "
-          f"training horizon and {err_ev:.3f} m at the end. ")
+    s += (f"Along its policy's evaluation dream (the dream the policy steers itself) the members disagree on where "
+          f"the block is by {dis_tr:.3f} m on average over {_steps(ens_m, 'train_horizon')} and {dis_ev:.3f} m over "
+          f"{_steps(ens_m, 'eval_horizon')}; their mean dream of a different rollout, the policy's real actions "
+          f"replayed open-loop, has the block {err_tr:.3f} m off reality at the training horizon and {err_ev:.3f} m "
+          "at the end. ")
     # the most cautious comparison the metrics allow: the larger disagreement figure against the
     # smaller error figure (the disagreement is a mean over steps, the error a value at one step)
     if shared_bias(disagreement=max(dis_tr, dis_ev), error=min(err_tr, err_ev)):
         s += (f"The members are closer to each other than their mean is to reality (by a factor of at least "
-              f"{min(err_tr, err_ev) / max(dis_tr, dis_ev):.1f}, the smaller error over the larger disagreement): most "
-              "of the error is one they share, a bias of the data they all learned from, and a penalty on "
-              "disagreement cannot see it. ")
+              f"{min(err_tr, err_ev) / max(dis_tr, dis_ev):.1f}, the smaller error over the larger disagreement). "
+              "The two figures come from two different rollouts of the same policy, from the same starts, so this "
+              "is a comparison of scales, not of the same steps; it suggests that most of the error is one the "
+              "members share, a bias of the data they all learned from, which a penalty on disagreement cannot "
+              "see. ")
     else:
-        s += "Their disagreement is as large as their error from reality: here it does flag the error. "
+        s += ("Their disagreement is as large as their error from reality (the two figures come from two different "
+              "rollouts of the same policy, so this compares scales, not the same steps): here it may flag the "
+              "error. ")
     if penalty is not None:
         gap_tr = ens_m["imagination_gap_train_horizon"]
-        s += (f"With a penalty of {penalty:g} per metre the actor paid about {penalty * dis_tr:.3f} per step of "
-              f"dreamed reward over its training horizon, against a gap of {gap_tr:+.3f} there. ")
+        hist = [float(x) for x in (train_disagreement if train_disagreement is not None else [])]
+        if hist:
+            tail = hist[-min(TRAIN_TAIL, len(hist)):]
+            paid = float(np.mean(tail))
+            s += (f"With a penalty of {penalty:g} per metre the actor paid about {penalty * paid:.3f} per step of "
+                  f"dreamed reward in its own training dreams ({_steps(ens_m, 'train_horizon')}, started from "
+                  f"frames of the training data; the members' disagreement there averaged {paid:.3f} m over the last {len(tail)} training "
+                  f"iterations), against a gap of {gap_tr:+.3f} over that horizon. ")
+        else:
+            s += (f"With a penalty of {penalty:g} per metre, the disagreement along the evaluation dream over "
+                  f"{_steps(ens_m, 'train_horizon')} would cost {penalty * dis_tr:.3f} per step of dreamed reward "
+                  f"(the training dreams' own disagreement is not in these metrics), against a gap of {gap_tr:+.3f} "
+                  "there. ")
     nums, verdict = expert_words(ens_m)
     s += f"The expert control ({nums}): {verdict}. "
     s += fix_verdict(single_m, ens_m, "The ensemble with its penalty", "the single model")[1]
@@ -1116,8 +1266,10 @@ def fixes_table(state_m: dict, loop_last_m: dict, delta_m: dict, ens_m: dict) ->
 def _drift_words(m: dict, k: float) -> str:
     d, dse = m["gap_drift_eval_horizon"], m["gap_drift_se_eval_horizon"]
     p, y = m["gap_drift_position_eval_horizon"], m["gap_drift_yaw_eval_horizon"]
-    larger = "yaw" if yaw_half_larger(position=p, yaw=y) else "position"
-    return f"{_pm(d, dse)} per step (position {p:+.3f}, yaw {y:+.3f}: the {larger} half is the larger)"
+    pse, yse = m["gap_drift_se_position_eval_horizon"], m["gap_drift_se_yaw_eval_horizon"]
+    order = halves_order(p, y, pse, yse, int(m["eval_episodes"]))
+    return (f"{_pm(d, dse)} per step (position {_pm(p, pse)}, yaw {_pm(y, yse)}: {ORDER_WORDS[order]}, by the rule "
+            "of the gap's halves above)")
 
 
 def conclusion(rounds: list, state_m: dict, delta_m: dict, ens_m: dict) -> str:
@@ -1327,11 +1479,11 @@ def fig_rounds(rounds: list):
             label="in the dream")
     ax.plot(x, _series(rounds, _real_key("eval_horizon")), "s-", color=WORLD_COLORS["real"], lw=2, label="in reality")
     ax.set_ylabel("mean reward per step\n(0 = block on target)")
-    ax.set_title(f"The two ratings the gap is the difference of ({_steps(last, 'eval_horizon')})")
+    ax.set_title(f"Both worlds' ratings ({_steps(last, 'eval_horizon')};\nthe gap is dream minus reality)")
     _round_axis(ax, rounds)
     ax.set_xticks(x, [f"{int(r)}\n{successes(m)}/{m['eval_episodes']} solved" for r, m in zip(x, rounds)])
-    ax.set_xlabel("loop round (0 = the offline chapter run), real successes under each")
-    _legend_below(ax)
+    ax.set_xlabel("loop round (0 = the offline chapter run),\nreal successes under each")
+    _legend_below(ax, y=-0.34)
     fig.suptitle("Dreamer's real-data loop: collect with the policy, train the model on everything, dream again")
     fig.tight_layout()
     return fig

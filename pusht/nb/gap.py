@@ -2,8 +2,12 @@
 
 Every threshold that decides a sentence here is a multiple of a standard error measured on the
 same run (``pusht.analysis``: per-start spread over the evaluation starts, or the training
-updates' own spread), never a typed-in amount. ``K_SE = 2``: a difference smaller than twice its
-standard error is reported as "not told apart from zero by these starts".
+updates' own spread), never a typed-in amount. The multiple is ``k`` = :func:`k_se`, the two-sided
+95% point of Student's t at n - 1 degrees of freedom for n evaluation starts (2.05 for 30 starts),
+as in notebooks 05 and 06; a difference is also held to the minimum effect that matters
+(:data:`~pusht.nb.stats.MIN_REWARD_EFFECT`). Each verdict has four outcomes: beyond k standard
+errors and the minimum effect (a change); beyond k standard errors but smaller than the minimum
+effect ("detected, but smaller than the minimum effect that matters"); and within the noise.
 """
 
 from __future__ import annotations
@@ -14,9 +18,25 @@ from ..env import SUCCESS_ANG, SUCCESS_POS, obs_to_pose
 from ..selfcheck import Question
 from . import figure
 from .claims import claim, finite
-from .stats import MIN_REWARD_EFFECT
+from .stats import LEVEL, MIN_REWARD_EFFECT, t_quantile, welch
 
-K_SE = 2.0
+# The default config's number of held-out starts (cfg.eval_episodes), for metrics that do not say.
+DEFAULT_STARTS = 30
+
+
+def k_se(n: int | None = None) -> float:
+    """k of every verdict here: the two-sided LEVEL point of Student's t at n - 1 degrees of
+    freedom, n the number of evaluation starts (DEFAULT_STARTS when not given)."""
+    n = DEFAULT_STARTS if n is None else int(n)
+    return t_quantile(max(n, 2) - 1)
+
+
+def _k(m: dict | None = None, n: int | None = None) -> float:
+    """k for a run's metrics ``m``: ``n`` if given, else the metrics' ``eval_episodes``."""
+    return k_se(n if n is not None else (m or {}).get("eval_episodes"))
+
+
+K_SE = k_se()                # for the default config's 30 starts (2.05); the functions take n
 # 5 mm: the smallest distance difference these sentences read as a difference (a sixth of the
 # pusher's radius; the per-start spread of final distances is several centimetres).
 NEAR = 0.005
@@ -28,14 +48,21 @@ TERMS = {"drift": "drift (zero actions)", "motion": "untrained actor's motion",
          "training": "training"}
 SPANS = {"train_horizon": "training horizon", "eval_horizon": "whole evaluation"}
 HALVES = ("position", "yaw")
-TEST_WORDS = (f"beyond {K_SE:g} standard errors over the starts and at least the minimum effect that "
-              f"matters, {MIN_REWARD_EFFECT:.2f} per step")
+
+
+def test_words(k: float = K_SE) -> str:
+    """How a difference is judged, in words (k standard errors, Student's t, and the minimum effect)."""
+    return (f"beyond k = {k:.2f} standard errors over the starts (Student's t, {LEVEL:.0%} two-sided) and at "
+            f"least the minimum effect that matters, {MIN_REWARD_EFFECT:.2f} per step")
+
+
+TEST_WORDS = test_words()
 
 
 # --- the claims this notebook makes about the learner's run -------------------------------------
 # Each is a named predicate (pusht.nb.claims): the sentence it guards is printed only when it holds,
-# and its true alternative otherwise. A reward-per-step difference counts when it is beyond K_SE
-# standard errors (measured on the same starts) AND at least MIN_REWARD_EFFECT.
+# and its true alternative otherwise. A reward-per-step difference counts when it is beyond k
+# (k_se: Student's t at the starts' degrees of freedom) standard errors (measured on the same starts) AND at least MIN_REWARD_EFFECT.
 def _beyond(value, se, k, min_effect) -> bool:
     return finite(value, se, k, min_effect) and value > k * se and value >= min_effect and value > 0
 
@@ -180,6 +207,19 @@ def pusher_tracked_worse(*, policy_err, expert_err, near):
     return policy_err > expert_err + near
 
 
+@claim("04.pusher_tracked_worse_tested", "replaying the policy's real actions, the model's pusher is farther "
+       "off than on held-out expert clips by more than k standard errors (Welch's t over the clips) and at "
+       "least 5 mm")
+def pusher_tracked_worse_tested(*, diff, se, k, min_effect):
+    return _beyond(diff, se, k, min_effect)
+
+
+@claim("04.pusher_tracked_better_tested", "replaying the policy's real actions, the model's pusher is nearer "
+       "than on held-out expert clips by more than k standard errors (Welch's t over the clips) and at least 5 mm")
+def pusher_tracked_better_tested(*, diff, se, k, min_effect):
+    return _beyond(-diff, se, k, min_effect)
+
+
 @claim("04.dream_ends_collapse", "the dreamed blocks' end points are less spread than the real ones', "
        "by more than 5 mm")
 def dream_ends_collapse(*, dream_spread, real_spread, near):
@@ -216,19 +256,48 @@ def clearly_positive(value: float, se: float, k: float = K_SE) -> bool:
     return term_positive(value=value, se=se, k=k, min_effect=MIN_REWARD_EFFECT)
 
 
-def ex1_verdict(metrics: list[dict]) -> str:
+def reading(value: float, se: float, k: float = K_SE, what: str = "") -> str:
+    """"up" or "down" (beyond ``k`` standard errors and at least the minimum effect), "small"
+    (beyond k standard errors, but smaller than the minimum effect that matters) or "none" (within
+    the noise), decided by registered claims (``04.term_positive``, ``04.term_negative``,
+    ``04.term_beyond_noise``)."""
+    if term_positive(value=value, se=se, k=k, min_effect=MIN_REWARD_EFFECT, what=what):
+        return "up"
+    if term_negative(value=value, se=se, k=k, min_effect=MIN_REWARD_EFFECT, what=what):
+        return "down"
+    if term_beyond_noise(value=value, se=se, k=k, what=what):
+        return "small"
+    return "none"
+
+
+def _two(ratio: float, k: float) -> tuple[str, str]:
+    """``ratio`` and ``k`` printed with the fewest decimals (2 to 4) that keep them apart."""
+    for d in (2, 3, 4):
+        a, b = f"{ratio:.{d}f}", f"{k:.{d}f}"
+        if a != b:
+            break
+    return a, b
+
+
+def _ratio(value: float, se: float, k: float = K_SE) -> str:
+    """|value| in standard errors, printed so that it never looks equal to ``k``."""
+    return _two(abs(value) / se, k)[0] if se > 0 else "many"
+
+
+def ex1_verdict(metrics: list[dict], n: int | None = None) -> str:
     """Exercise 1's measured outcome (a letter of ``EX1_OPTIONS``) from each seed's evaluation
     metrics (``two_world_eval`` with ``train_horizon``), decided by registered claims. Decided on
     the whole evaluation, the deployed 10 s that the question is about; "well above" means beyond
-    ``K_SE`` standard errors of the per-start gaps and at least ``MIN_REWARD_EFFECT``; a mixed
-    result across seeds is decided on the seeds' means."""
+    k standard errors of the per-start gaps (:func:`k_se`, from ``n`` or each metrics'
+    ``eval_episodes``) and at least ``MIN_REWARD_EFFECT``; a mixed result across seeds is decided
+    on the seeds' means."""
     if real_success(success_rates=[m["real_success_rate"] for m in metrics]):
         return "a"
-    if not all([gap_rosy(gap=m["imagination_gap"], se=m["imagination_gap_se_eval_horizon"], k=K_SE,
+    if not all([gap_rosy(gap=m["imagination_gap"], se=m["imagination_gap_se_eval_horizon"], k=_k(m, n),
                          min_effect=MIN_REWARD_EFFECT) for m in metrics]):
         return "d"
     zero_rosy = [drift_half_of_gap(drift=m["gap_drift_eval_horizon"], se=m["gap_drift_se_eval_horizon"],
-                                   gap=m["imagination_gap"], k=K_SE, min_effect=MIN_REWARD_EFFECT)
+                                   gap=m["imagination_gap"], k=_k(m, n), min_effect=MIN_REWARD_EFFECT)
                  for m in metrics]
     # evaluated on every run (so the claim is recorded), though it decides only a mixed result
     on_means = drift_half_on_means(drifts=[m["gap_drift_eval_horizon"] for m in metrics],
@@ -248,9 +317,9 @@ def ex1_sentence(seed: int, m: dict, n_eval: int) -> str:
             f"{round(m['real_success_rate'] * n_eval)}/{n_eval} real successes.")
 
 
-def ex1_note() -> str:
+def ex1_note(n: int | None = None) -> str:
     """What the ± and "well above" of the reconciliation mean."""
-    return (f"(± is one standard error over the starts; 'well above' means {TEST_WORDS}.)")
+    return f"(± is one standard error over the starts; 'well above' means {test_words(k_se(n))}.)"
 
 
 def dream_check_text(mismatch: float) -> str:
@@ -261,24 +330,34 @@ def dream_check_text(mismatch: float) -> str:
             "per step; the figures below use yours, so re-check the task above.")
 
 
-def exploitation_text(metrics: dict, H: int) -> str:
+def exploitation_text(metrics: dict, H: int, n: int | None = None) -> str:
     """After the reconciliation: what each seed's run shows about the question "what has the actor
     become good at": the training term within the ``H`` steps its gradient saw (a claim)."""
     lines = []
+    k = None
     for seed, m in metrics.items():
+        k = _k(m, n)
         v, se = m["gap_training_train_horizon"], m["gap_training_se_train_horizon"]
-        if training_exploits(value=v, se=se, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+        if training_exploits(value=v, se=se, k=k, min_effect=MIN_REWARD_EFFECT):
             verdict = ("training made the dream rosier than it made reality: the actor learned something "
                        "only the dream pays for")
         else:
-            verdict = ("training did not make the dream measurably rosier than reality: this actor did not "
-                       "measurably exploit its dream")
+            r = reading(v, se, k, f"training train_horizon seed {seed}")
+            verdict = {
+                "down": "training made the dream *gloomier* than it made reality, beyond the noise and the "
+                        "minimum effect: this actor did not exploit its dream",
+                "small": f"that is beyond the noise ({_ratio(v, se, k)} standard errors) but smaller than the minimum "
+                         "effect that matters, so it is not read as exploitation: this actor did not measurably "
+                         "exploit its dream",
+                "none": "that is within the noise: training did not make the dream measurably rosier than "
+                        "reality, and this actor did not measurably exploit its dream",
+            }["none" if r == "up" else r]
         lines.append(f"* seed {seed}: within the first {H} steps, training's part of the gap is "
                      f"**{v:+.3f}** ± {se:.3f} per step; {verdict}.")
     return ("**What your run shows.** Whether the actor exploited its dream is measured by the *training* "
             "term of the gap (taken apart below): what training added in the dream beyond what it added in "
-            f"reality, over the {H} steps the actor's gradient saw. It counts when it is {TEST_WORDS}.\n\n"
-            + "\n".join(lines))
+            f"reality, over the {H} steps the actor's gradient saw. It counts when it is "
+            f"{test_words(k if k is not None else k_se(n))}.\n\n" + "\n".join(lines))
 
 
 # --- the headline and one start ------------------------------------------------------------------
@@ -317,16 +396,12 @@ def median_start_text(i: int, dream_roll, real_roll) -> str:
 
 
 # --- reading the split of the gap ----------------------------------------------------------------
-def describe(value: float, se: float, what: str = "") -> str:
+def describe(value: float, se: float, what: str = "", k: float = K_SE) -> str:
     """A term in words, judged against its own standard error and the minimum effect that matters
-    (registered claims ``04.term_positive`` and ``04.term_negative``)."""
-    if term_positive(value=value, se=se, k=K_SE, min_effect=MIN_REWARD_EFFECT, what=what):
-        return "clearly positive"
-    if term_negative(value=value, se=se, k=K_SE, min_effect=MIN_REWARD_EFFECT, what=what):
-        return "clearly negative"
-    if term_beyond_noise(value=value, se=se, k=K_SE, what=what):
-        return "beyond the noise but smaller than the minimum effect that matters"
-    return "not told apart from zero"
+    (:func:`reading`)."""
+    return {"up": "clearly positive", "down": "clearly negative",
+            "small": "beyond the noise but smaller than the minimum effect that matters",
+            "none": "not told apart from zero"}[reading(value, se, k, what)]
 
 
 def half_difference_se(rollouts: dict, steps: int | None) -> float:
@@ -342,48 +417,69 @@ def half_difference_se(rollouts: dict, steps: int | None) -> float:
     return _se(x[~np.isnan(x)])
 
 
-def dominant_half(m: dict, span: str, se_diff: float | None = None) -> str | None:
+def dominant_half(m: dict, span: str, se_diff: float | None = None, k: float | None = None) -> str | None:
     """"position" or "yaw" when that half of the gap over ``span`` is positive and the larger one by
-    more than K_SE standard errors of the two halves' difference, ``se_diff`` (per start,
+    more than k standard errors of the two halves' difference, ``se_diff`` (per start,
     :func:`half_difference_se`; without it, the sum of the halves' own standard errors, a
     conservative bound), and the minimum effect; None when neither is (claim ``04.half_dominates``)."""
     (p, pse), (y, yse) = (_term_args(m, "imagination_gap", span, h) for h in HALVES)
     se = pse + yse if se_diff is None else se_diff
+    k = _k(m) if k is None else k
     for which, a, b in (("yaw", y, p), ("position", p, y)):
-        if a >= b and half_dominates(larger=a, smaller=b, se_diff=se, k=K_SE, min_effect=MIN_REWARD_EFFECT,
+        if a >= b and half_dominates(larger=a, smaller=b, se_diff=se, k=k, min_effect=MIN_REWARD_EFFECT,
                                      which=f"{span} {which}"):
             return which
     return None
 
 
-def dominance_sentence(m: dict, span: str, se_diff: float | None = None) -> str:
-    """Which half of the gap is the larger on this run, in words."""
-    (p, _), (y, _) = (_term_args(m, "imagination_gap", span, h) for h in HALVES)
-    which = dominant_half(m, span, se_diff)
+def dominance_sentence(m: dict, span: str, se_diff: float | None = None, k: float | None = None) -> str:
+    """Which half of the gap is the larger on this run, in words; when neither is, which condition
+    failed (the larger half not positive, the difference within the noise, or under the minimum
+    effect)."""
+    (p, pse), (y, yse) = (_term_args(m, "imagination_gap", span, h) for h in HALVES)
+    k = _k(m) if k is None else k
+    which = dominant_half(m, span, se_diff, k)
     name = "gap"
-    noise = (f"{se_diff:.3f}, its standard error over the starts" if se_diff is not None else
-             "the sum of the halves' standard errors, a conservative bound")
+    se = pse + yse if se_diff is None else se_diff
+    kind = ("its standard error over the starts" if se_diff is not None else
+            "a conservative bound on its standard error (the sum of the halves' standard errors)")
+    noise = (f"{se:.3f}, its standard error over the starts" if se_diff is not None else
+             f"{se:.3f}, the sum of the halves' standard errors, a conservative bound")
     total = m[f"imagination_gap_{span}"]
     shares = (f", that is {p / total:.0%} and {y / total:.0%} of the {name}"
               if p > 0 and y > 0 and total > 0 else "")
     if which is None:
+        big, a, b = ("yaw", y, p) if y >= p else ("position", p, y)
+        d = a - b
+        beyond, enough = d > k * se and d != 0, d >= MIN_REWARD_EFFECT
+        if a <= 0:
+            why = f"the larger half, {big}, is not positive"
+        elif not beyond and not enough:
+            why = (f"their difference, {d:.3f}, is neither beyond {k:.2f} times {kind}, {se:.3f}, "
+                   f"nor as large as the minimum effect {MIN_REWARD_EFFECT:.2f}")
+        elif not beyond:
+            why = (f"their difference, {d:.3f}, is within the noise: not beyond {k:.2f} times {kind}, "
+                   f"{se:.3f}")
+        else:
+            why = (f"their difference, {d:.3f}, is beyond {k:.2f} times {kind}, {se:.3f}, but "
+                   f"smaller than the minimum effect that matters, {MIN_REWARD_EFFECT:.2f}")
         return (f"Neither half of the {name} stands out as the larger, positive part (position {p:+.3f}, yaw "
-                f"{y:+.3f}{shares}; their difference is not beyond {K_SE:g} times {noise}, or is below the "
-                f"minimum effect {MIN_REWARD_EFFECT:.2f}).")
+                f"{y:+.3f}{shares}): {why}.")
     other = "position" if which == "yaw" else "yaw"
     a, b = (y, p) if which == "yaw" else (p, y)
     what = "the block's *orientation* (its yaw)" if which == "yaw" else "the block's *position*"
     return (f"Most of the {name} is in its **{which}** half: {a:+.3f} against {b:+.3f} from {other} "
-            f"(the difference is beyond {K_SE:g} times {noise}, and at least {MIN_REWARD_EFFECT:.2f}): "
+            f"(the difference is beyond {k:.2f} times {noise}, and at least {MIN_REWARD_EFFECT:.2f}): "
             f"on this run the dream flatters {what} more than its {other}.")
 
 
-def split_sentence(m: dict, span: str, steps: int, rollouts: dict | None = None) -> str:
+def split_sentence(m: dict, span: str, steps: int, rollouts: dict | None = None, n: int | None = None) -> str:
     """The gap and its three terms over ``span`` ("train_horizon" or "eval_horizon"), each with
     its position and yaw halves, and which half of the gap is the larger (judged on the per-start
     difference of the halves when the run's ``rollouts`` are given)."""
+    k = _k(m, n)
     gap, gse = m[f"imagination_gap_{span}"], m[f"imagination_gap_se_{span}"]
-    rosy = gap_rosy(gap=gap, se=gse, k=K_SE, min_effect=MIN_REWARD_EFFECT)
+    rosy = gap_rosy(gap=gap, se=gse, k=k, min_effect=MIN_REWARD_EFFECT)
 
     def halves(key):
         (p, _), (y, _) = (_term_args(m, key, span, h) for h in HALVES)
@@ -393,48 +489,100 @@ def split_sentence(m: dict, span: str, steps: int, rollouts: dict | None = None)
     for term, label in TERMS.items():
         v, se = m[f"gap_{term}_{span}"], m[f"gap_{term}_se_{span}"]
         share = f", {v / gap:.0%} of the gap" if rosy else ""
-        parts.append(f"{label} **{v:+.3f}** ± {se:.3f} ({halves(f'gap_{term}')}; {describe(v, se, f'{term} {span}')}{share})")
+        parts.append(f"{label} **{v:+.3f}** ± {se:.3f} ({halves(f'gap_{term}')}; "
+                     f"{describe(v, se, f'{term} {span}', k)}{share})")
     return (f"Over the first **{steps} steps** ({SPANS[span]}) the gap is **{gap:+.3f}** ± {gse:.3f} per step "
             f"({halves('imagination_gap')}): " + "; ".join(parts) + ". "
             + dominance_sentence(m, span, None if rollouts is None else half_difference_se(
-                rollouts, steps if span == "train_horizon" else None)))
+                rollouts, steps if span == "train_horizon" else None), k))
 
 
-def split_story(m: dict, H: int) -> str:
-    """What the two horizons say together about drift and exploitation (registered claims)."""
+def after_horizon_training(rollouts: dict, H: int) -> tuple[float, float, int]:
+    """Training's part of the gap over the steps AFTER the first ``H`` (the ones the actor's gradient
+    never saw), per start: (mean, standard error over the starts, number of starts)."""
+    def seg(key):
+        r = np.asarray(rollouts[key].rewards, dtype=float)[H:]
+        return np.nanmean(r, axis=0) if len(r) else np.full(r.shape[1], np.nan)
+    x = (seg("dream_trained") - seg("dream_untrained")) - (seg("real_trained") - seg("real_untrained"))
+    x = x[~np.isnan(x)]
+    se = float(x.std(ddof=1) / np.sqrt(len(x))) if len(x) > 1 else float("nan")
+    return (float(x.mean()) if len(x) else float("nan")), se, int(len(x))
+
+
+def split_story(m: dict, H: int, rollouts: dict | None = None, n: int | None = None) -> str:
+    """What the two horizons say together about drift and exploitation (registered claims). With
+    the run's ``rollouts``, training's part over the steps after the training horizon is measured
+    on its own (:func:`after_horizon_training`)."""
+    k = _k(m, n)
+    words = test_words(k)
     tr_h, tr_e = m["gap_training_train_horizon"], m["gap_training_eval_horizon"]
     se_h, se_e = m["gap_training_se_train_horizon"], m["gap_training_se_eval_horizon"]
     drift_h, drift_se = m["gap_drift_train_horizon"], m["gap_drift_se_train_horizon"]
     s = ""
-    exploits_h = training_exploits(value=tr_h, se=se_h, k=K_SE, min_effect=MIN_REWARD_EFFECT)
+    exploits_h = training_exploits(value=tr_h, se=se_h, k=k, min_effect=MIN_REWARD_EFFECT)
     if exploits_h:
         gap_h = m["imagination_gap_train_horizon"]
         share = f", {tr_h / gap_h:.0%} of the gap over those steps" if gap_h > 0 else ""
         s += (f"Within the {H} steps its gradient saw, training made the dream rosier than it made reality "
-              f"by {tr_h:+.3f} ± {se_h:.3f} per step ({TEST_WORDS}{share}): that part the actor "
+              f"by {tr_h:+.3f} ± {se_h:.3f} per step ({words}{share}): that part the actor "
               "learned and only the dream pays for, which is exploitation. ")
     else:
-        s += (f"Within the {H} steps its gradient saw, training did not make the dream measurably rosier "
-              f"than reality ({tr_h:+.3f} ± {se_h:.3f}; it would count when {TEST_WORDS}): on this seed "
-              "the actor did not measurably exploit its dream. ")
-    exploits_e = training_exploits_eval(value=tr_e, se=se_e, k=K_SE, min_effect=MIN_REWARD_EFFECT)
-    if exploits_h and term_negative(value=tr_e, se=se_e, k=K_SE, min_effect=MIN_REWARD_EFFECT,
-                                    what="training eval_horizon, story"):
-        s += (f"Over the whole evaluation that advantage is reversed ({tr_e:+.3f} ± {se_e:.3f}, clearly negative): "
-              "past its training horizon the trained actor's dream is gloomier, against reality, than the "
-              "untrained one's. ")
-    elif exploits_h and not exploits_e:
-        s += (f"Over the whole evaluation that advantage is gone ({tr_e:+.3f} ± {se_e:.3f}): past its "
-              "training horizon the actor's dream is no rosier, against reality, than the untrained one's. ")
-    elif exploits_e and not exploits_h:
-        s += (f"Over the whole evaluation, though, training's part is clearly positive ({tr_e:+.3f} ± {se_e:.3f}): "
-              "the trained actor's dream turns rosy only after the steps its gradient saw. ")
-    if drift_rosy(value=drift_h, se=drift_se, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+        r = reading(tr_h, se_h, k, "training train_horizon, story")
+        s += f"Within the {H} steps its gradient saw, training's part is {tr_h:+.3f} ± {se_h:.3f} per step: " + {
+            "down": "training made the dream *gloomier* than it made reality, beyond the noise and the minimum "
+                    "effect, so on this seed the actor did not exploit its dream. ",
+            "small": f"beyond the noise ({_ratio(tr_h, se_h, k)} standard errors) but smaller than the minimum effect "
+                     "that matters, so it is not read as exploitation: on this seed the actor did not measurably "
+                     "exploit its dream. ",
+            "none": f"within the noise (it would count when {words}): training did not make the dream measurably "
+                    "rosier than reality, and on this seed the actor did not measurably exploit its dream. ",
+            "up": ""}[r]
+    exploits_e = training_exploits_eval(value=tr_e, se=se_e, k=k, min_effect=MIN_REWARD_EFFECT)
+    re_ = "up" if exploits_e else reading(tr_e, se_e, k, "training eval_horizon, story")
+    whole = f"Over the whole evaluation training's part is {tr_e:+.3f} ± {se_e:.3f}"
+    if exploits_h:
+        s += whole + {
+            "up": ", still clearly positive: the actor's advantage in the dream lasts past its training horizon. ",
+            "down": ": that advantage is reversed (clearly negative): over the whole run the trained actor's dream "
+                    "is gloomier, against reality, than the untrained one's. ",
+            "small": (": that advantage is gone from the whole run's mean, which is beyond the noise but smaller "
+                      "than the minimum effect" + (" and below zero. " if tr_e < 0 else ". ")),
+            "none": ": that advantage is gone from the whole run's mean (within the noise). "}[re_]
+    elif exploits_e:
+        s += whole + (", clearly positive: the trained actor's dream turns rosy only after the steps its gradient "
+                      "saw. ")
+    else:
+        s += whole + " (" + describe(tr_e, se_e, "training eval_horizon, story (again)", k) + "). "
+    if rollouts is not None and len(rollouts["dream_trained"].rewards) > H:
+        v, se, _ = after_horizon_training(rollouts, H)
+        ra = reading(v, se, k, "training after the training horizon")
+        T = len(rollouts["dream_trained"].rewards)
+        s += f"Over the steps its gradient never saw (steps {H + 1} to {T}) alone, training's part is {v:+.3f} ± {se:.3f}: " + {
+            "up": "clearly positive, so there too the trained actor's dream is rosier, against reality, than the "
+                  "untrained one's. ",
+            "down": "clearly negative, so past its training horizon the trained actor's dream is *gloomier*, against "
+                    "reality, than the untrained one's" + (": the advantage it learned within its horizon is "
+                                                           "reversed after it. " if exploits_h else ". "),
+            "small": ("beyond the noise but smaller than the minimum effect that matters: past its training horizon "
+                      "the trained actor's dream is slightly " + ("gloomier" if v < 0 else "rosier")
+                      + ", against reality, than the untrained one's, by less than matters. "),
+            "none": "within the noise: past its training horizon this run cannot tell the trained actor's dream, "
+                    "against reality, from the untrained one's. "}[ra]
+    rd = "up" if drift_rosy(value=drift_h, se=drift_se, k=k, min_effect=MIN_REWARD_EFFECT) else \
+        reading(drift_h, drift_se, k, "drift train_horizon, story")
+    if rd == "up":
         s += (f"The drift, the model's own optimism with the pusher standing still, is {drift_h:+.3f} ± "
               f"{drift_se:.3f} per step already over the first {H} steps.")
+    elif rd == "small":
+        s += (f"With the pusher standing still, the dream differs from reality over the first {H} steps by "
+              f"{drift_h:+.3f} ± {drift_se:.3f}: beyond the noise, but smaller than the minimum effect that "
+              "matters, so it is not measurably rosier than reality over those steps.")
+    elif rd == "down":
+        s += (f"With the pusher standing still, the dream is *gloomier* than reality over the first {H} steps "
+              f"({drift_h:+.3f} ± {drift_se:.3f}), not measurably rosier than reality over those steps.")
     else:
         s += (f"With the pusher standing still, the dream is not measurably rosier than reality over the "
-              f"first {H} steps ({drift_h:+.3f} ± {drift_se:.3f}).")
+              f"first {H} steps ({drift_h:+.3f} ± {drift_se:.3f}, within the noise).")
     return s
 
 
@@ -526,10 +674,12 @@ def dip_sentence(rollouts: dict, H: int, data_mean=None, dt: float = 0.1) -> str
 
 
 # --- the expert control ---------------------------------------------------------------------------
-def expert_text(m: dict, steps: dict) -> str:
+def expert_text(m: dict, steps: dict, n: int | None = None) -> str:
     """Could the dream recognise success? The scripted expert's pushes against zero actions, in each
     world, over both spans (registered claims); the actor's question is decided on the training
     horizon, the dreams its gradient saw."""
+    k = _k(m, n)
+
     def sig(world, span, half=""):
         tag = f"_{half}" if half else ""
         return m[f"expert_signal{tag}_{world}_{span}"], m[f"expert_signal{tag}_{world}_se_{span}"]
@@ -549,23 +699,31 @@ def expert_text(m: dict, steps: dict) -> str:
     rv, rse = sig("real", "train_horizon")
     dv, dse = sig("dream", "train_horizon")
     s += "\n"
-    if reality_pays_expert(value=rv, se=rse, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+    if reality_pays_expert(value=rv, se=rse, k=k, min_effect=MIN_REWARD_EFFECT):
         s += f"Within the first {H} steps reality rewards {pushes} over standing still. "
+    elif reading(rv, rse, k, "expert real train_horizon") == "small":
+        s += (f"Within the first {H} steps reality's difference is beyond the noise but smaller than the minimum "
+              "effect that matters: even reality does not reward the expert's pushes over standing still by "
+              "enough to count; those steps are too few to tell success apart. ")
     else:
         s += (f"Within the first {H} steps even reality does not reward the expert's pushes over standing still "
               "beyond the noise and the minimum effect: those steps are too few to tell success apart. ")
-    if dream_pays_expert(value=dv, se=dse, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+    if dream_pays_expert(value=dv, se=dse, k=k, min_effect=MIN_REWARD_EFFECT):
         s += ("**The dream does too**" + (": it can recognise success." if solves else ".")
               + " An actor that pushed the way the expert pushes would have been paid for it in its training "
               "dreams: a learnable signal existed.")
-    elif dream_penalises_expert(value=dv, se=dse, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+    elif dream_penalises_expert(value=dv, se=dse, k=k, min_effect=MIN_REWARD_EFFECT):
         s += ("**The dream pays the expert's pushes less than standing still.** An actor that copied the expert "
               "exactly would have scored *worse* in its training dreams than one that never moved: the dream's "
               f"reward did not lead toward {pushes}, so imitating the expert was never what it asked for.")
+    elif reading(dv, dse, k, "expert dream train_horizon") == "small":
+        s += ("**The dream does not tell the expert's pushes apart from standing still by enough to matter**: its "
+              f"difference is beyond the noise, but {'above' if dv > 0 else 'below'} zero by less than the minimum "
+              "effect that matters. The signal an actor would need to learn the task is too small to count.")
     else:
-        s += ("**The dream does not tell the expert's pushes apart from standing still** (not beyond the noise "
-              "and the minimum effect): the signal an actor would need to learn the task is not there.")
-    s += f" (Each verdict: {TEST_WORDS}.)"
+        s += ("**The dream does not tell the expert's pushes apart from standing still** (within the noise): "
+              "the signal an actor would need to learn the task is not there.")
+    s += f" (Each verdict: {test_words(k)}.)"
     return s
 
 
@@ -579,61 +737,119 @@ def real_vs_zero(rollouts: dict) -> tuple[float, float]:
 
 
 def pusher_paths_text(m: dict, rollouts: dict, n_eval: int, touch_tol: float) -> str:
-    """What the policy did to the real block: its reward against zero actions (a claim), contact,
+    """What the policy did to the real block: its reward against zero actions (claims: clearly
+    better, clearly worse, beyond the noise but under the minimum effect, within the noise), contact,
     and how far the block moved."""
     diff, se = real_vs_zero(rollouts)
+    x = rollouts["real_trained"].return_per_step - rollouts["real_zero"].return_per_step
+    k = k_se(int(np.sum(~np.isnan(x))))
     r_t = float(np.nanmean(rollouts["real_trained"].return_per_step))
     r_z = float(np.nanmean(rollouts["real_zero"].return_per_step))
     s = (f"In reality the trained policy earns **{r_t:+.3f}** per step; a pusher that never moves earns "
-         f"**{r_z:+.3f}** from the same starts (difference {diff:+.3f} ± {se:.3f}). ")
-    if real_beats_zero(diff=diff, se=se, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+         f"**{r_z:+.3f}** from the same starts (difference {diff:+.3f} ± {se:.3f}"
+         + (f", {_ratio(diff, se, k)} standard errors). " if se > 0 else "). "))
+    if real_beats_zero(diff=diff, se=se, k=k, min_effect=MIN_REWARD_EFFECT):
         s += "So the trained policy does clearly better in reality than standing still. "
-    elif real_worse_than_zero(diff=diff, se=se, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+    elif real_worse_than_zero(diff=diff, se=se, k=k, min_effect=MIN_REWARD_EFFECT):
         s += "So the trained policy does clearly *worse* in reality than standing still: its pushes cost reward. "
+    elif term_beyond_noise(value=diff, se=se, k=k, what="real trained minus zero actions"):
+        s += (f"The noise does not explain that difference (it is beyond k = {_two(abs(diff) / se, k)[1]} standard "
+              "errors), but it is smaller "
+              f"than the minimum effect that matters, {MIN_REWARD_EFFECT:.2f} per step: the trained policy earns "
+              f"slightly {'more' if diff > 0 else 'less'} than standing still, by less than the reward of holding the "
+              "block 2 cm nearer the target. Detected, but too small to count as doing "
+              f"{'better' if diff > 0 else 'worse'}. ")
     else:
-        s += "So in reality the trained policy does no better than standing still, by the reward's account. "
-    s += (f"(A difference counts when it is {TEST_WORDS}.) The pusher's rim came within {100 * touch_tol:.1f} cm "
+        s += ("That is within the noise: in reality this run cannot tell the trained policy from standing still, "
+              "by the reward's account. ")
+    s += (f"(A difference counts when it is {test_words(k)}.) The pusher's rim came within {100 * touch_tol:.1f} cm "
           f"of the block in **{m['real_episodes_touching_block']}/{n_eval}** starts; on average its closest approach "
           f"was **{100 * m['real_pusher_min_gap']:.1f} cm**, and the real block moved **{m['real_block_displacement']:.3f} m** "
           f"on average (at most {m['real_block_displacement_max']:.3f} m).")
     return s
 
 
-def company_text(m: dict, H: int) -> str:
+def company_text(m: dict, H: int, n: int | None = None) -> str:
     """After "good company": whether this run's gap is exploitation or the dream's own drift."""
+    k = _k(m, n)
     tr, tse = m["gap_training_train_horizon"], m["gap_training_se_train_horizon"]
     dr, dse = m["gap_drift_train_horizon"], m["gap_drift_se_train_horizon"]
-    if training_exploits(value=tr, se=tse, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+    if training_exploits(value=tr, se=tse, k=k, min_effect=MIN_REWARD_EFFECT):
         s = (f"**On your run** the actor did exploit its dream: within the {H} steps its gradient saw, training "
              f"made the dream rosier than reality by {tr:+.3f} ± {tse:.3f} per step. ")
     else:
+        r = reading(tr, tse, k, "training train_horizon, company")
         s = (f"**On your run** the gap is not the actor's exploitation: within the {H} steps its gradient saw, "
-             f"training's part is {tr:+.3f} ± {tse:.3f} per step, not {TEST_WORDS}. ")
-    if drift_rosy(value=dr, se=dse, k=K_SE, min_effect=MIN_REWARD_EFFECT):
+             f"training's part is {tr:+.3f} ± {tse:.3f} per step, " + {
+                 "down": "clearly negative. ",
+                 "small": "beyond the noise but smaller than the minimum effect that matters. ",
+                 "none": "within the noise. ", "up": ""}[r]
+             + f"(It would count when {test_words(k)}.) ")
+    if drift_rosy(value=dr, se=dse, k=k, min_effect=MIN_REWARD_EFFECT):
         s += (f"The dream is rosy even with nobody pushing ({dr:+.3f} ± {dse:.3f} over the same steps): an actor "
               "trained in it is graded on a model that flatters doing nothing, and the remedies above are about "
               "that too, since both give the model data or doubt where it is wrong.")
     else:
+        r = reading(dr, dse, k, "drift train_horizon, company")
         s += (f"With nobody pushing, the dream is not measurably rosier than reality over those steps "
-              f"({dr:+.3f} ± {dse:.3f}).")
+              f"({dr:+.3f} ± {dse:.3f}" + {"down": ", clearly gloomier", "none": ", within the noise",
+                                          "small": ", beyond the noise but under the minimum effect",
+                                          "up": ""}[r] + ").")
     return s
 
 
 # --- distribution shift ---------------------------------------------------------------------------
-def shift_sentence(m: dict, dt: float = 0.1) -> str:
-    """Distribution shift, in words, from the metrics of ``analysis.shift_metrics`` (claims)."""
+def replay_test(replay: dict, expert_replay: dict, H: int):
+    """Welch's t-test of the model's pusher error ``H`` steps into a replay (or at the last step of
+    a shorter one): the policy's real actions (``replay["pusher"]``, (T, B)) minus held-out expert
+    clips (``expert_replay["pusher"]``), per clip, with the minimum effect NEAR (5 mm)."""
+    a, b = np.asarray(replay["pusher"], float), np.asarray(expert_replay["pusher"], float)
+    i = min(H, len(a), len(b)) - 1
+    pa, pb = a[i][~np.isnan(a[i])], b[i][~np.isnan(b[i])]
+    return welch(pb, pa, min_effect=NEAR), float(pa.mean()), float(pb.mean())
+
+
+def shift_sentence(m: dict, dt: float = 0.1, replay: dict | None = None, expert_replay: dict | None = None) -> str:
+    """Distribution shift, in words, from the metrics of ``analysis.shift_metrics`` (claims). With
+    the per-clip replay errors of ``analysis.replay_error`` and ``expert_replay_error`` ((T, B)
+    arrays), the pusher's two errors are compared by Welch's t-test; without them, by the 5 mm
+    resolution alone (no noise estimate), which the sentence says."""
     H = m["imag_horizon"]
     s = (f"The expert data has the pusher against a wall in **{m['expert_pusher_at_wall_share']:.0%}** of its "
          f"steps; the deployed policy in **{m['real_pusher_at_wall_share']:.0%}** of its real steps. ")
-    s += (f"Replaying the policy's own real actions, the model's pusher is **{100 * m['replay_pusher_err_train_horizon']:.1f} cm** "
-          f"off after {H * dt:.1f} s, against {100 * m['expert_replay_pusher_err_train_horizon']:.1f} cm on held-out "
-          f"expert clips; its block is {100 * m['replay_block_err_train_horizon']:.1f} cm off (expert clips: "
+    pol, exp = m["replay_pusher_err_train_horizon"], m["expert_replay_pusher_err_train_horizon"]
+    test = None
+    if replay is not None and expert_replay is not None:
+        test, pol, exp = replay_test(replay, expert_replay, H)
+    s += (f"Replaying the policy's own real actions, the model's pusher is **{100 * pol:.1f} cm** "
+          f"off after {H * dt:.1f} s, against {100 * exp:.1f} cm on held-out expert clips; its block is "
+          f"{100 * m['replay_block_err_train_horizon']:.1f} cm off (expert clips: "
           f"{100 * m['expert_replay_block_err_train_horizon']:.1f} cm). ")
-    worse = pusher_tracked_worse(policy_err=m["replay_pusher_err_train_horizon"],
-                                 expert_err=m["expert_replay_pusher_err_train_horizon"], near=NEAR)
-    s += ("So the model tracks the pusher worse on the policy's data than on the expert's: the policy "
-          "has left the data the model knows. " if worse else
-          "On the pusher, the model tracks the policy's data about as well as the expert's (within 5 mm). ")
+    # the 5 mm resolution alone, evaluated on every run (so the claim is recorded); it decides the
+    # sentence only when the per-clip errors are not given
+    worse_by_resolution = pusher_tracked_worse(policy_err=pol, expert_err=exp, near=NEAR)
+    if test is not None:
+        worse = pusher_tracked_worse_tested(diff=test.diff, se=test.se, k=test.k, min_effect=NEAR)
+        better = pusher_tracked_better_tested(diff=test.diff, se=test.se, k=test.k, min_effect=NEAR)
+        s += f"The difference, {100 * test.diff:+.1f} ± {100 * test.se:.1f} cm ({test.why().replace('0.005', '0.005 m')}), "
+        if worse:
+            s += ("is beyond the noise and at least 5 mm: the model tracks the pusher worse on the policy's data "
+                  "than on the expert's, so the policy has left the data the model knows. ")
+        elif better:
+            s += "is beyond the noise and at least 5 mm the other way: the model tracks the policy's pusher *better*. "
+        elif test.detected:
+            s += ("is beyond the noise but under 5 mm: on the pusher, the model tracks the policy's data about as "
+                  "well as the expert's. ")
+        else:
+            s += ("is within the noise: on the pusher, this run cannot tell how the model tracks the policy's data "
+                  "from how it tracks the expert's. ")
+    else:
+        worse = worse_by_resolution
+        s += ("The model's pusher is more than 5 mm farther off on the policy's data than on the expert's (5 mm "
+              "is a resolution, not a test: these metrics keep no per-clip errors to give the difference a "
+              "standard error), a sign that the policy has left the data the model knows. " if worse else
+              "On the pusher, the model tracks the policy's data about as well as the expert's (within 5 mm, a "
+              "resolution, not a test: these metrics keep no per-clip errors). ")
     s += (f"The evaluation dream runs **{m['dream_steps_per_train_clip']:.2f}x** longer than the "
           f"{m['train_clip_steps']}-step clips the model trained on. The dreamed blocks end a mean "
           f"**{m['dream_final_block_spread']:.3f} m** from their common centre, the real ones "
@@ -643,7 +859,8 @@ def shift_sentence(m: dict, dt: float = 0.1) -> str:
                            near=NEAR):
         s += ": the dream's end points collapse toward one place, whatever the start."
     else:
-        s += ": the dream's end points are about as spread as the real ones (within 5 mm, or more)."
+        s += (": the dream's end points are not more than 5 mm less spread than the real ones (5 mm is a "
+              "resolution, not a test).")
     return s
 
 
@@ -687,9 +904,10 @@ def seeds_sentence(metrics: dict, rollouts: dict | None = None) -> str:
     by = {h: [str(s) for s, v in halves.items() if v == h] for h in ("yaw", "position", None)}
     said = [f"yaw on seed{'s' * (len(by['yaw']) > 1)} {', '.join(by['yaw'])}" if by["yaw"] else "",
             f"position on seed{'s' * (len(by['position']) > 1)} {', '.join(by['position'])}" if by["position"] else "",
-            f"neither, beyond the noise, on seed{'s' * (len(by[None]) > 1)} {', '.join(by[None])}" if by[None] else ""]
-    s += ("Over the whole evaluation, the larger half of the gap (beyond the noise and the minimum effect) is "
-          + "; ".join(x for x in said if x) + ". ")
+            f"neither, beyond the noise and the minimum effect, on seed{'s' * (len(by[None]) > 1)} "
+            f"{', '.join(by[None])}" if by[None] else ""]
+    s += ("Over the whole evaluation, the larger half of the gap (beyond k standard errors, Student's t, and the "
+          "minimum effect) is " + "; ".join(x for x in said if x) + ". ")
     drifts = [m["gap_drift_eval_horizon"] for m in metrics.values()]
     s += (f"The drift alone ranges from {min(drifts):+.3f} to {max(drifts):+.3f}: "
           + ("on every seed it is at least half of the gap." if drift_most_every_seed(drifts=drifts, gaps=list(gaps.values()))
@@ -753,8 +971,9 @@ def fig_two_worlds(dream_roll, real_roll, gap: float, seed: int, seconds: float)
 
 
 @figure
-def fig_decomposition(m: dict, steps: dict):
-    """The controls in both worlds at both horizons, and the gap's three terms with 2-SE bars.
+def fig_decomposition(m: dict, steps: dict, n: int | None = None):
+    """The controls in both worlds at both horizons, and the gap's three terms with bars of k
+    standard errors (:func:`k_se`, from ``n`` or the metrics' ``eval_episodes``).
 
     ``steps`` maps "train_horizon" and "eval_horizon" to their number of steps.
     """
@@ -762,6 +981,7 @@ def fig_decomposition(m: dict, steps: dict):
 
     fig, axes = plt.subplots(1, 3, figsize=(16, 5.0), gridspec_kw={"width_ratios": [1, 1, 1.2]})
     x = np.arange(3)
+    kk = _k(m, n)
     for ax, span in zip(axes[:2], SPANS):
         for dx, world in ((-0.2, "dream"), (0.2, "real")):
             ax.bar(x + dx, [m[f"{p}_{world}_return_per_step_{span}"] for p in POLICY_LABELS], 0.4,
@@ -778,14 +998,14 @@ def fig_decomposition(m: dict, steps: dict):
     for j, span in enumerate(SPANS):
         keys = ["imagination_gap", *(f"gap_{t}" for t in TERMS)]
         vals = [m[f"{k}_{span}"] for k in keys]
-        errs = [K_SE * m[f"{k}_se_{span}"] for k in keys]
+        errs = [kk * m[f"{k}_se_{span}"] for k in keys]
         ax.bar(np.arange(4) + (j - 0.5) * 2 * width, vals, 2 * width, yerr=errs, capsize=3,
                color=("tab:cyan", "tab:blue")[j], label=f"first {steps[span]} steps ({SPANS[span]})")
     ax.set_xticks(np.arange(4), ["gap", *(v.replace(" (", "\n(").replace("actor's ", "actor's\n")
                                           for v in TERMS.values())], fontsize=8)
     ax.axhline(0, color="k", lw=0.8)
     ax.set_ylabel("reward per step (dream minus reality)")
-    ax.set_title("The gap = drift + motion + training\n(bars: ±2 standard errors)")
+    ax.set_title(f"The gap = drift + motion + training\n(bars: ±{kk:.2f} standard errors, Student's t 95%)")
     ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
     axes[0].legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=2)
     fig.suptitle("Three policies, two worlds, two horizons (same starts)")
@@ -834,26 +1054,28 @@ def fig_block_over_time(rollouts: dict, H: int, clip: int, data_mean_dist: float
 
 
 @figure
-def fig_expert_control(m: dict, steps: dict):
+def fig_expert_control(m: dict, steps: dict, n: int | None = None):
     """The scripted expert's pushes against zero actions, per step, in the dream and in reality,
-    over both spans, for the whole reward and each of its terms, with 2-SE bars and the minimum
+    over both spans, for the whole reward and each of its terms, with bars of k standard errors
+    (:func:`k_se`) and the minimum
     effect that matters shaded."""
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.4), sharey=True)
     x = np.arange(3)
+    kk = _k(m, n)
     for ax, span in zip(axes, SPANS):
         for dx, world in ((-0.2, "dream"), (0.2, "real")):
             keys = [f"expert_signal{tag}_{world}" for tag in ("", "_position", "_yaw")]
             ax.bar(x + dx, [m[f"{k}_{span}"] for k in keys], 0.4,
-                   yerr=[K_SE * m[f"{k}_se_{span}"] for k in keys], capsize=3, color=COLORS[world], alpha=0.85,
+                   yerr=[kk * m[f"{k}_se_{span}"] for k in keys], capsize=3, color=COLORS[world], alpha=0.85,
                    label="in the dream (the expert's actions replayed)" if world == "dream" else "in reality")
         ax.axhspan(-MIN_REWARD_EFFECT, MIN_REWARD_EFFECT, color="0.85", zorder=0,
                    label=f"smaller than the minimum effect (±{MIN_REWARD_EFFECT:.2f})")
         ax.axhline(0, color="k", lw=0.8)
         ax.set_xticks(x, ["whole reward", "position term", "yaw term"])
         ax.set_title(f"First {steps[span]} steps ({SPANS[span]})")
-    axes[0].set_ylabel("expert minus zero actions\n(reward per step; bars: ±2 standard errors)")
+    axes[0].set_ylabel(f"expert minus zero actions\n(reward per step; bars: ±{kk:.2f} standard errors)")
     fig.legend(*axes[0].get_legend_handles_labels(), loc="lower center", ncol=3, fontsize=8)
     fig.suptitle("Does each world pay the pushes that solve the task more than standing still?")
     fig.tight_layout(rect=(0, 0.08, 1, 1))

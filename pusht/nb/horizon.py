@@ -14,7 +14,14 @@ verdict below asks two things (:mod:`pusht.nb.stats`) and says which test it use
   distance, at least ``SUCCESS_POS`` (2 cm), the environment's own success tolerance.
 
 A difference that passes the first and fails the second is reported as "detected, but smaller
-than the minimum effect that matters", never as a change.
+than the minimum effect that matters", never as a change. One that fails the first is "not told
+apart from no change by the spread across actor seeds", and when its point value is at least the
+minimum effect that matters it says so: the sweep could not resolve it, which is not evidence that
+nothing changed.
+
+The standard errors are over actor seeds only: every run shares one world model (of ``SEED``) and
+one fixed set of evaluation starts, so the error bars say nothing about another world model or
+other starts.
 
 Every sentence that reads the run is decided by a registered claim (``05.*``,
 :mod:`pusht.nb.claims`), evaluated on the numbers it is given, with its true alternative printed
@@ -53,7 +60,7 @@ EX2_RULE = (
     "of freedom: the fewer the seeds, the larger `k`), and it is at least "
     f"**{MIN_REWARD_EFFECT:.3f} reward per step**, the minimum effect that matters (the reward of holding "
     f"the block {SUCCESS_POS * 100:.0f} cm, the success tolerance, nearer the target on every step). "
-    "Anything else is **stays put**.")
+    "Anything else is **(c)**: no change that this sweep resolves as one that matters.")
 EX2_OPTIONS = {
     "a": "The gap **grows**: trained with 30-step dreams, the policy is rated higher by the dream, "
          "relative to reality, than trained with 5-step dreams (whether or not the gap changes sign "
@@ -61,9 +68,10 @@ EX2_OPTIONS = {
     "b": "The gap **shrinks**: trained with 30-step dreams, the policy is rated lower by the dream, "
          "relative to reality, than trained with 5-step dreams (whether or not the gap changes sign "
          "on the way).",
-    "c": "The gap **stays put**: whatever the gap is, its change from 5 to 30 steps is no larger than "
-         "the spread across actor seeds allows, or smaller than the minimum effect that matters "
-         f"({MIN_REWARD_EFFECT:.3f} per step).",
+    "c": "**No resolved change**: from 5 to 30 steps the gap does not change beyond what the spread "
+         "across actor seeds can resolve, or it changes by less than the minimum effect that matters "
+         f"({MIN_REWARD_EFFECT:.3f} per step). This is not the same as \"the gap stays put\": with few seeds "
+         "a change that matters can still go unresolved.",
 }
 VERDICT_LETTER = {"up": "a", "down": "b", "same": "c"}
 
@@ -87,14 +95,20 @@ def _register_change(q: str, what: str) -> dict:
     def detected(*, short, long):
         return welch(short, long).detected
 
-    for f, tail in ((rose, "rose"), (fell, "fell"), (detected, "change_detected")):
+    def size_matters(*, short, long, min_effect):
+        return welch(short, long, min_effect=min_effect).matters
+
+    for f, tail in ((rose, "rose"), (fell, "fell"), (detected, "change_detected"),
+                    (size_matters, "change_size_matters")):
         f.__name__ = f.__qualname__ = f"{q}_{tail}"
     ways = ("beyond k standard errors of Welch's t-test over actor seeds and by at least the minimum "
             "effect that matters")
     return {"up": claim(f"05.{q}_rose", f"{what} rose from the shorter to the longer horizon, {ways}")(rose),
             "down": claim(f"05.{q}_fell", f"{what} fell from the shorter to the longer horizon, {ways}")(fell),
             "detected": claim(f"05.{q}_change_detected", f"{what} changed between the two horizons beyond k "
-                              "standard errors of Welch's t-test (whatever its size)")(detected)}
+                              "standard errors of Welch's t-test (whatever its size)")(detected),
+            "size": claim(f"05.{q}_change_size_matters", f"the point change of {what} between the two horizons "
+                          "is at least the minimum effect that matters (whatever the noise)")(size_matters)}
 
 
 def _register_sign(q: str, what: str) -> dict:
@@ -107,13 +121,19 @@ def _register_sign(q: str, what: str) -> dict:
     def detected(*, values):
         return sign_test(values).detected
 
-    for f, tail in ((positive, "positive"), (negative, "negative"), (detected, "nonzero_detected")):
+    def size_matters(*, values, min_effect):
+        return sign_test(values, min_effect=min_effect).matters
+
+    for f, tail in ((positive, "positive"), (negative, "negative"), (detected, "nonzero_detected"),
+                    (size_matters, "size_matters")):
         f.__name__ = f.__qualname__ = f"{q}_{tail}"
     ways = "beyond k standard errors of a one-sample t-test over actor seeds and by at least the minimum effect"
     return {"up": claim(f"05.{q}_positive", f"{what} is above zero, {ways}")(positive),
             "down": claim(f"05.{q}_negative", f"{what} is below zero, {ways}")(negative),
             "detected": claim(f"05.{q}_nonzero_detected", f"{what} differs from zero beyond k standard "
-                              "errors of a one-sample t-test (whatever its size)")(detected)}
+                              "errors of a one-sample t-test (whatever its size)")(detected),
+            "size": claim(f"05.{q}_size_matters", f"the mean of {what} is at least the minimum effect that "
+                          "matters in size (whatever the noise)")(size_matters)}
 
 
 CHANGES = {
@@ -136,31 +156,41 @@ SIGNS = {
         "yaw_minus_position", "the size of the gap's yaw half minus the size of its position half, at one horizon"),
 }
 
-KINDS = ("up", "down", "small", "same")
+KINDS = ("up", "down", "small", "unresolved", "same")
+
+
+def _kind(up: bool, down: bool, detected: bool, size: bool) -> str:
+    """up / down (beyond the noise and the minimum effect), small (beyond the noise, below the
+    minimum effect), unresolved (not beyond the noise, though at least the minimum effect in size:
+    the seeds cannot tell it from luck) or same (neither beyond the noise nor the minimum effect)."""
+    return "up" if up else "down" if down else "small" if detected else "unresolved" if size else "same"
 
 
 def judge_change(q: str, short, long, min_effect: float = MIN_REWARD_EFFECT) -> tuple[Test, str]:
     """Welch's t-test of ``long`` against ``short`` (per-seed values), through the claims of
     quantity ``q``: kind "up" or "down" (beyond k SE and at least ``min_effect``), "small" (beyond
-    k SE but smaller than ``min_effect``) or "same" (not beyond k SE)."""
+    k SE but smaller than ``min_effect``), "unresolved" (not beyond k SE, though the point change is
+    at least ``min_effect``) or "same" (not beyond k SE and smaller than ``min_effect``)."""
     c = CHANGES[q]
     s, lg = _plain_list(short), _plain_list(long)
     up = c["up"](short=s, long=lg, min_effect=min_effect)
     down = c["down"](short=s, long=lg, min_effect=min_effect)
     det = c["detected"](short=s, long=lg)
-    kind = "up" if up else "down" if down else "small" if det else "same"
+    size = c["size"](short=s, long=lg, min_effect=min_effect)
+    kind = _kind(up, down, det, size)
     return welch(s, lg, min_effect=min_effect), kind
 
 
 def judge_sign(q: str, values, min_effect: float = MIN_REWARD_EFFECT) -> tuple[Test, str]:
     """The one-sample t-test of ``values`` against zero, through the claims of quantity ``q``:
-    kind "up", "down", "small" or "same" as in :func:`judge_change`."""
+    kind "up", "down", "small", "unresolved" or "same" as in :func:`judge_change`."""
     c = SIGNS[q]
     v = _plain_list(values)
     up = c["up"](values=v, min_effect=min_effect)
     down = c["down"](values=v, min_effect=min_effect)
     det = c["detected"](values=v)
-    kind = "up" if up else "down" if down else "small" if det else "same"
+    size = c["size"](values=v, min_effect=min_effect)
+    kind = _kind(up, down, det, size)
     return sign_test(v, min_effect=min_effect), kind
 
 
@@ -230,6 +260,18 @@ def real_block_ends_further(*, final, spawn, min_effect):
     return sign_test(np.asarray(final, dtype=float) - spawn, min_effect=min_effect).outcome == "up"
 
 
+@claim("05.dream_block_ends_nearer", "the dreamed block ends nearer the target than it spawned, by at least the "
+       "success tolerance and beyond k SE (one-sample t-test over actor seeds)")
+def dream_block_ends_nearer(*, final, spawn, min_effect):
+    return sign_test(np.asarray(final, dtype=float) - spawn, min_effect=min_effect).outcome == "down"
+
+
+@claim("05.real_block_ends_nearer", "the real block ends nearer the target than it spawned, by at least the "
+       "success tolerance and beyond k SE (one-sample t-test over actor seeds)")
+def real_block_ends_nearer(*, final, spawn, min_effect):
+    return sign_test(np.asarray(final, dtype=float) - spawn, min_effect=min_effect).outcome == "down"
+
+
 @claim("05.dream_turns_untouched_block", "with zero actions the dreamed T ends nearer the target angle than the "
        "real T, by more than the yaw success tolerance")
 def dream_turns_untouched_block(*, dream_deg, real_deg, tol_deg):
@@ -276,16 +318,24 @@ def ex2_verdict(gaps: dict) -> str:
     ``05.gap_fell`` (Welch's t-test and the minimum effect, :func:`judge_change`)."""
     hs = sorted(gaps)
     _, kind = judge_change("gap", gaps[hs[0]], gaps[hs[-1]])
-    return VERDICT_LETTER["same" if kind == "small" else kind]
+    return VERDICT_LETTER[kind if kind in ("up", "down") else "same"]
 
 
 # --- sentences ----------------------------------------------------------------------------------
 SIGN_WORDS = {"up": "clearly positive", "down": "clearly negative",
               "small": "told apart from zero, but smaller than the minimum effect that matters",
+              "unresolved": "at least the minimum effect in size, but not told apart from zero by the spread "
+                            "across actor seeds",
               "same": "not told apart from zero"}
 CHANGE_WORDS = {"up": "rose", "down": "fell",
                 "small": "moved by less than the minimum effect that matters (beyond the noise, too small to count)",
-                "same": "did not change beyond the spread across actor seeds"}
+                "unresolved": "moved by at least the minimum effect that matters, but not beyond the spread across "
+                              "actor seeds: not resolved",
+                "same": "did not change beyond the spread across actor seeds, and moved by less than the minimum "
+                        "effect that matters"}
+ERROR_BAR_SCOPE = ("The ± covers the spread across actor seeds only: every run uses the same world model and the "
+                   "same evaluation starts, so it does not include how the values would move with another world "
+                   "model or other starts (the table's ± over starts is a different error).")
 
 
 def _se(se: float) -> str:
@@ -305,7 +355,8 @@ def _tk(t: Test) -> str:
 def rule_text(n_seeds: int, min_effect: float = MIN_REWARD_EFFECT, unit: str = "reward per step") -> str:
     """The rule behind every '±' verdict, generated from the number of actor seeds."""
     k1 = t_quantile(n_seeds - 1) if n_seeds > 1 else math.inf
-    return (f"Each value is the mean ± standard error over {n_seeds} actor seeds. \"Clearly positive\" or "
+    return (f"Each value is the mean ± standard error over {n_seeds} actor seeds. {ERROR_BAR_SCOPE} "
+            "\"Clearly positive\" or "
             f"\"clearly negative\" means a one-sample t-test puts it beyond k = {k1:.2f} standard errors "
             f"(Student's t, {LEVEL:.0%} two-sided, {n_seeds - 1} degrees of freedom) and it is at least "
             f"{min_effect:.3f} {unit}, the minimum effect that matters.")
@@ -339,10 +390,17 @@ def reconcile_text(gaps: dict, n_eval: int, eval_horizon: int) -> str:
     hs = sorted(gaps)
     n = {len(v) for v in gaps.values()}
     lines = [f"The gap over the whole evaluation ({eval_horizon} steps, {n_eval} starts), mean ± standard "
-             f"error over {'/'.join(map(str, sorted(n)))} actor seeds:"]
+             f"error over {'/'.join(map(str, sorted(n)))} actor seeds. {ERROR_BAR_SCOPE}"]
     lines += ["  " + horizon_line(h, gaps[h]).replace("**", "") for h in hs]
     main, kind = judge_change("gap", gaps[hs[0]], gaps[hs[-1]])
     lines.append(f"From {hs[0]} to {hs[-1]} steps the gap {change_phrase(main, kind).replace('**', '')}.")
+    if kind == "unresolved":
+        lines.append(f"So the letter is (c) because this sweep could not resolve the change, not because the gap "
+                     f"stayed put: a move of {main.diff:+.3f} per step would matter, but with these seeds it is "
+                     "within what seed luck produces.")
+    elif kind == "small":
+        lines.append("So the letter is (c): the change is beyond the seed-to-seed noise, but smaller than the minimum "
+                     "effect that matters.")
     if len(hs) > 2:
         steps = []
         for a, b in zip(hs, hs[1:]):
@@ -357,12 +415,16 @@ def reconcile_text(gaps: dict, n_eval: int, eval_horizon: int) -> str:
     return "\n".join(lines)
 
 
-def mechanism_text(training: dict, dream_gain: dict, real_gain: dict, training_own: dict | None = None) -> str:
+def mechanism_text(training: dict, dream_gain: dict, real_gain: dict, training_own: dict | None = None,
+                   gaps: dict | None = None, predicted: str | None = None) -> str:
     """Which mechanism moved the gap on this run, read off the training term (``{horizon: [per
     actor seed]}``, whole evaluation) and its two sides: ``dream_gain`` (trained minus untrained
     actor, in the dream) and ``real_gain`` (the same in reality), training = dream_gain - real_gain.
     ``training_own``: the training term over each run's own first H steps, if measured. Each
-    mechanism is a registered claim; the text names the one(s) that held."""
+    mechanism is a registered claim; the text names the one(s) that held.
+    ``gaps`` (``{horizon: [...]}``): the lead-in asks which mechanism moved the gap only if the gap
+    moved (:func:`judge_change`); ``predicted``: the learner's locked letter, so that the reminder
+    about reasons is added only when it matches the measured one."""
     hs = sorted(training)
     lo, hi = hs[0], hs[-1]
     s_lo, s_hi = _plain_list(training[lo]), _plain_list(training[hi])
@@ -379,10 +441,17 @@ def mechanism_text(training: dict, dream_gain: dict, real_gain: dict, training_o
         t_own, k_own = judge_sign("training_own_span", own)
         own_line = (f"Over its own first {lo} steps, the span its training dreams covered, the {lo}-step actors' "
                     f"training term is {t_own.diff:+.3f} ± {_se(t_own.se)} ({SIGN_WORDS[k_own]}; {_tk(t_own)}).")
-    lines = ["Which mechanism moved the gap on this run? The drift and the untrained actor's motion involve no "
-             "trained actor, so what the horizon can change is the training term: how much training changed the "
-             "dream's rating of the policy, minus how much it changed reality's (reward per step, whole evaluation, "
-             "mean over actor seeds):"]
+    gap_kind = judge_change("gap", gaps[min(gaps)], gaps[max(gaps)])[1] if gaps else None
+    if gap_kind in ("up", "down"):
+        lead = "Which mechanism moved the gap on this run?"
+    elif gap_kind is not None:
+        lead = (f"The gap's change from {min(gaps)} to {max(gaps)} steps is not resolved as a change that matters, "
+                "so there is no measured move to explain; what did the horizon do to the gap's terms?")
+    else:
+        lead = "What did the horizon do to the gap's terms?"
+    lines = [lead + " The drift and the untrained actor's motion involve no trained actor, so what the horizon can "
+             "change is the training term: how much training changed the dream's rating of the policy, minus how much "
+             "it changed reality's (reward per step, whole evaluation, mean over actor seeds):"]
     for h in hs:
         lines.append(f"  {h} steps: training term {np.mean(training[h]):+.3f} = dream {np.mean(dream_gain[h]):+.3f} "
                      f"minus reality {np.mean(real_gain[h]):+.3f}")
@@ -420,11 +489,16 @@ def mechanism_text(training: dict, dream_gain: dict, real_gain: dict, training_o
         elif kind == "small":
             lines.append("The training term moved by less than the minimum effect that matters, so on this run no "
                          "mechanism moved the gap with the horizon by an amount that matters.")
+        elif kind == "unresolved":
+            lines.append(f"The training term moved by {t.diff:+.3f} per step, at least the minimum effect that matters, "
+                         "but the spread across actor seeds does not tell that move apart from no change: on this run "
+                         "no mechanism is resolved (more actor seeds might resolve it).")
         else:
             lines.append("The training term's change is not told apart from seed luck by the spread across actor "
                          "seeds, so on this run no mechanism is told apart either.")
-    lines.append("A letter can match for a different reason than yours: check your one-sentence reason against the "
-                 "mechanism measured here.")
+    if gaps and predicted is not None and str(predicted).strip().lower().strip("()") == ex2_verdict(gaps):
+        lines.append("Your letter matches, but a letter can match for a different reason than yours: check your "
+                     "one-sentence reason against what is measured here.")
     return "\n".join(lines)
 
 
@@ -499,16 +573,30 @@ def terms_sentence(terms: dict, imagined: dict, untrained: dict) -> str:
     elif sign == "up":
         s += ("Positive means that, from the untrained to the trained actor, the dream's rating rose further "
               "than reality's. ")
-    _, worse = judge_change("dream_training_effect", untrained[lo], imagined[lo])
+    te, worse = judge_change("dream_training_effect", untrained[lo], imagined[lo])
+    n = len(_plain_list(imagined[lo]))
     s += (f"In the dream, over the whole evaluation, the actor trained on {lo}-step dreams earns "
-          f"**{np.mean(imagined[lo]):+.3f}** per step and the untrained one {np.mean(untrained[lo]):+.3f}")
+          f"**{np.mean(imagined[lo]):+.3f}** per step and the untrained one {np.mean(untrained[lo]):+.3f}, "
+          f"a difference of {te.diff:+.3f}")
     if worse == "down":
         s += (": training made the policy worse in the very world model it was trained in, once the dream runs "
-              "the full evaluation (Welch's t-test, beyond the minimum effect). ")
+              f"the full evaluation (Welch's t-test over {n} actor seeds, {_tk(te)}; beyond the minimum effect "
+              f"{MIN_REWARD_EFFECT:.3f}). ")
     elif worse == "up":
-        s += ": in the dream that trained it, training paid off (Welch's t-test, beyond the minimum effect). "
+        s += (f": in the dream that trained it, training paid off (Welch's t-test over {n} actor seeds, {_tk(te)}; "
+              f"beyond the minimum effect {MIN_REWARD_EFFECT:.3f}). ")
+    elif worse == "small":
+        s += (f": detected beyond the spread across {n} actor seeds ({_tk(te)}), but smaller than the minimum effect "
+              f"that matters ({MIN_REWARD_EFFECT:.3f}), so in the dream training changed the policy's rating too "
+              "little to count. ")
+    elif worse == "unresolved":
+        s += (f": at least the minimum effect that matters ({MIN_REWARD_EFFECT:.3f}) in size, but not told apart from "
+              f"no change by the spread across {n} actor seeds (Welch's t-test, {_tk(te)}): whether training changed "
+              "the policy's rating in the dream is not resolved on this run. ")
     else:
-        s += ": in the dream, training did not change the policy's rating by the minimum effect that matters. "
+        s += (f": neither beyond the spread across {n} actor seeds (Welch's t-test, {_tk(te)}) nor as large as the "
+              f"minimum effect that matters ({MIN_REWARD_EFFECT:.3f}), so no change of the dream's rating by training "
+              "is seen. ")
     return s
 
 
@@ -526,29 +614,31 @@ def halves_sentence(gap_position: dict, gap_yaw: dict, drift_position: dict, dri
          + "; ".join(f"{h} steps: {np.mean(gap_position[h]) + np.mean(gap_yaw[h]):+.3f} = "
                      f"{np.mean(gap_position[h]):+.3f} position + **{np.mean(gap_yaw[h]):+.3f}** yaw"
                      for h in hs) + ". ")
-    larger = {}
+    larger, tests = {}, {}
     for h in hs:
         d = np.abs(np.asarray(gap_yaw[h], dtype=float)) - np.abs(np.asarray(gap_position[h], dtype=float))
-        _, larger[h] = judge_sign("yaw_minus_position", d)
+        tests[h], larger[h] = judge_sign("yaw_minus_position", d)
     yaw = [h for h in hs if larger[h] == "up"]
     pos = [h for h in hs if larger[h] == "down"]
+    rest = [h for h in hs if h not in yaw and h not in pos]
     rule = "one-sample t-test on each seed's |yaw| minus |position|, and at least the minimum effect"
     if len(yaw) == len(hs):
         s += f"At every horizon the yaw half is the larger ({rule}): most of the gap is about how the block is turned, not where it is. "
     elif len(pos) == len(hs):
         s += f"At every horizon the position half is the larger ({rule}): most of the gap is about where the block is. "
-    elif not yaw and not pos:
-        s += f"At no horizon is either half clearly the larger ({rule}). "
     else:
-        parts = []
-        if yaw:
-            parts.append(f"the yaw half is the larger at {', '.join(map(str, yaw))} steps")
-        if pos:
-            parts.append(f"the position half at {', '.join(map(str, pos))} steps")
-        rest = [h for h in hs if h not in yaw and h not in pos]
-        if rest:
-            parts.append(f"at {', '.join(map(str, rest))} steps neither half is clearly the larger")
-        s += "Which half dominates depends on the horizon: " + "; ".join(parts) + f" ({rule}). "
+        if yaw and pos:                       # the test resolves opposite answers at different horizons
+            s += (f"Which half dominates depends on the horizon: the yaw half is the larger at "
+                  f"{', '.join(map(str, yaw))} steps, the position half at {', '.join(map(str, pos))} steps ({rule}). ")
+        elif yaw:
+            s += f"The yaw half is the larger at {', '.join(map(str, yaw))} steps ({rule}). "
+        elif pos:
+            s += f"The position half is the larger at {', '.join(map(str, pos))} steps ({rule}). "
+        else:
+            s += f"At no horizon is either half clearly the larger ({rule}). "
+        s += ("Where the test names no larger half: " + "; ".join(
+            f"at {h} steps, |yaw| minus |position| is {tests[h].diff:+.3f} ± {_se(tests[h].se)} "
+            f"({SIGN_WORDS[larger[h]]}; {_tk(tests[h])})" for h in rest) + ". ")
     dp = np.concatenate([drift_position[h] for h in hs])
     dy = np.concatenate([drift_yaw[h] for h in hs])
     s += (f"The drift, with nobody touching the block, splits into {dp.mean():+.3f} position and "
@@ -629,6 +719,23 @@ def block_sentence(dream_final: dict, real_final: dict, spawn: float, curves: di
               f"further from the target than where it spawned, {bar}. ")
     if not far_d and not far_r:
         s += f"In neither world does the block end clearly further from the target than it spawned (clearly: {bar}). "
+    near_d = [h for h in hs if dream_block_ends_nearer(final=_plain_list(dream_final[h]), spawn=float(spawn),
+                                                       min_effect=MIN_DIST_EFFECT)]
+    near_r = [h for h in hs if real_block_ends_nearer(final=_plain_list(real_final[h]), spawn=float(spawn),
+                                                      min_effect=MIN_DIST_EFFECT)]
+    steps = lambda hl: f"{' and '.join(map(str, hl))}-step"      # noqa: E731
+    if near_d and not near_r:
+        s += (f"The contrast: after training with {steps(near_d)} dreams the dream ends with the block clearly nearer "
+              f"the target than where it spawned ({bar}), while in reality the block ends clearly nearer at no "
+              "horizon. In those runs the dream shows the pushing bringing the block in; reality does not show it. ")
+    elif near_d and near_r:
+        s += (f"The block ends clearly nearer the target than where it spawned ({bar}) in the dream after training "
+              f"with {steps(near_d)} dreams, and in reality after training with {steps(near_r)} dreams. ")
+    elif near_r:
+        s += (f"In reality the actors trained with {steps(near_r)} dreams brought the block clearly nearer the target "
+              f"than where it spawned ({bar}); the dream shows that at no horizon. ")
+    else:
+        s += f"In neither world does the block end clearly nearer the target than it spawned (clearly: {bar}). "
     if curves:
         best = {h: closest_approach(np.mean(curves[h]["dream"], axis=0), dt) for h in hs}
         s += ("In the dream (mean over seeds) the block comes closest to the target at "
@@ -653,10 +760,14 @@ def conclusion(gaps: dict, real: dict, terms: dict) -> str:
         s = (f"**Reality pays about the same however far the actor dreamed**: its reward per step moved by "
              f"{r.diff:+.3f} from {lo} to {hi} steps, beyond the seed-to-seed noise but smaller than the {rule} "
              f"({_tk(r)}). ")
+    elif kr == "unresolved":
+        s = (f"**Whether reality's pay changed with the horizon is not resolved**: its reward per step moved by "
+             f"{r.diff:+.3f} from {lo} to {hi} steps, at least the {rule}, but the seed-to-seed spread does not tell "
+             f"that apart from no change ({_tk(r)}). ")
     else:
         s = (f"**Reality's pay did not change detectably with the horizon**: its reward per step moved by "
              f"{r.diff:+.3f} from {lo} to {hi} steps, which the seed-to-seed spread does not tell apart from no "
-             f"change ({_tk(r)}). ")
+             f"change ({_tk(r)}), and by less than the minimum effect that matters ({MIN_REWARD_EFFECT:.3f} per step). ")
     if kg in ("up", "down"):
         s += (f"**The gap did move** ({g.diff:+.3f} per step from {lo} to {hi} steps; {g.why()}), on one and the "
               "same frozen world model. So the gap is not a fixed property of the model: it is the model's error "
@@ -668,10 +779,24 @@ def conclusion(gaps: dict, real: dict, terms: dict) -> str:
     elif kg == "small":
         s += (f"The gap moved by {g.diff:+.3f} per step from {lo} to {hi} steps: beyond the seed-to-seed noise, but "
               f"smaller than the {rule}, so on this model the horizon changed the gap too little to matter. ")
+    elif kg == "unresolved":
+        s += (f"The gap moved by {g.diff:+.3f} per step from {lo} to {hi} steps: at least the {rule}, but the "
+              f"seed-to-seed spread does not tell it apart from no change ({_tk(g)}). So between {lo} and {hi} steps, "
+              "with these seeds, this sweep cannot say whether the horizon moved the gap: it did not resolve the "
+              "change, which is not the same as finding none. ")
     else:
         s += (f"The gap moved by {g.diff:+.3f} per step from {lo} to {hi} steps, which the seed-to-seed spread does "
-              f"not tell apart from no change ({_tk(g)}): with these seeds, the horizon's effect on the gap is not "
-              "told apart from seed luck. ")
+              f"not tell apart from no change ({_tk(g)}), and by less than the minimum effect that matters ({MIN_REWARD_EFFECT:.3f} per step): between {lo} and {hi} steps, "
+              "with these seeds, the horizon's effect on the gap is not told apart from seed luck. ")
+    if len(hs) > 2:
+        steps = [(a, b, *judge_change("gap_step", gaps[a], gaps[b])) for a, b in zip(hs, hs[1:])]
+        other = [(a, b, t, k) for a, b, t, k in steps if k in ("up", "down") and k != kg]
+        if other:
+            s += ("Between neighbouring horizons the tests say something else: "
+                  + "; ".join(f"from {a} to {b} steps the gap {CHANGE_WORDS[k]} ({t.diff:+.3f} per step; {_tk(t)})"
+                              for a, b, t, k in other)
+                  + f". The exercise's letter compares only {lo} with {hi} steps; each step between neighbours is a "
+                  "separate test on the same runs. ")
     s += ("The model itself, and every error it makes, is the same in every run; the horizon only decides "
           "which policy those errors are seen through.")
     return s
@@ -716,14 +841,17 @@ def _jitter(n: int, width: float, rng) -> np.ndarray:
 
 
 def _points_and_mean(ax, x: float, values, color, label=None, mean_label=None, width=0.6, rng=None):
-    """Each actor seed as a dot, the mean as a bar of ±k standard errors (k of :func:`sign_test`)."""
+    """Each actor seed as a dot, the mean as a bar of ±k standard errors (k of :func:`sign_test`).
+    The dots sit left of ``x`` and the bar right of it, so that seeds that agree closely do not hide
+    under the bar."""
     v = np.asarray(values, dtype=float)
     rng = rng if rng is not None else np.random.default_rng(0)
-    ax.scatter(x + _jitter(v.size, width * 0.4, rng), v, s=28, color=color, alpha=0.75, zorder=3,
+    shift = width * 0.22 if v.size > 1 else 0.0
+    ax.scatter(x - shift + _jitter(v.size, width * 0.15, rng), v, s=28, color=color, alpha=0.75, zorder=3,
                edgecolors="k", linewidths=0.4, label=label)
     if v.size > 1:
         t = sign_test(v)
-        ax.errorbar(x, t.diff, yerr=t.k * t.se, fmt="_", ms=18, mew=2.5, color="k", capsize=5, lw=1.5,
+        ax.errorbar(x + shift, t.diff, yerr=t.k * t.se, fmt="_", ms=12, mew=2.5, color="k", capsize=4, lw=1.5,
                     zorder=4, label=mean_label)
     else:
         ax.plot([x - width / 2, x + width / 2], [v.mean()] * 2, color="k", lw=2.5, label=mean_label)
@@ -743,8 +871,9 @@ def fig_gap_vs_horizon(gaps: dict, imagined: dict, real: dict, eval_horizon: int
     ax = axes[0]
     for i, h in enumerate(hs):
         _points_and_mean(ax, x[i], gaps[h], HORIZON_COLORS[i % len(HORIZON_COLORS)],
-                         label="one actor seed" if i == 0 else None,
                          mean_label="mean, 95% interval over seeds" if i == 0 else None, rng=rng)
+    ax.scatter([], [], s=28, color="lightgray", edgecolors="k", linewidths=0.4,
+               label="one actor seed (colour: horizon)")
     ax.axhline(0, color="gray", lw=1, ls="--")
     ax.text(x[-1] + 0.45, 0, "dream = reality", va="bottom", ha="right", fontsize=8, color="gray")
     ax.set_ylabel("imagination gap\n(imagined minus real reward per step)")

@@ -258,12 +258,12 @@ results = run_exercise("ex1", experiment_ex1, EX1_SEEDS)
 
 # %%
 n_eval = cfg.eval_episodes
-M = {s: r["metrics"] for s, r in results.items()}
+M = {s: {**r["metrics"], "eval_episodes": n_eval} for s, r in results.items()}   # n sets each test's k
 mismatch = max(abs(M[s]["imagined_return_per_step"] - r["res"].metrics["imagined_return_per_step"])
                for s, r in results.items())
 display(Markdown(nb04.dream_check_text(mismatch)))
 reconcile("ex1", nb04.ex1_verdict(list(M.values())),
-          "\n".join(nb04.ex1_sentence(s, m, n_eval) for s, m in M.items()) + "\n" + nb04.ex1_note())
+          "\n".join(nb04.ex1_sentence(s, m, n_eval) for s, m in M.items()) + "\n" + nb04.ex1_note(n_eval))
 display(Markdown(nb04.exploitation_text(M, min(cfg.imag_horizon, cfg.eval_horizon))))
 
 # %% [markdown] nbgrader={"grade": false, "grade_id": "ex1_order", "locked": true, "points": 1, "schema_version": 3, "solution": false, "task": true}
@@ -283,7 +283,7 @@ display(Markdown(nb04.exploitation_text(M, min(cfg.imag_horizon, cfg.eval_horizo
 
 # %%
 head = results[cfg.seed] if cfg.seed in results else experiment_ex1([cfg.seed])[cfg.seed]
-hm, hr = head["metrics"], head["rollouts"]
+hm, hr = {**head["metrics"], "eval_episodes": n_eval}, head["rollouts"]
 dream_roll, real_roll = hr["dream"], hr["real"]
 fig = nb04.fig_two_worlds(dream_roll, real_roll, hm["imagination_gap"], cfg.seed, cfg.eval_horizon * 0.1)
 show(fig, "04_two_worlds.png")
@@ -337,7 +337,7 @@ steps = {"train_horizon": min(cfg.imag_horizon, cfg.eval_horizon), "eval_horizon
 fig = nb04.fig_decomposition(hm, steps)
 show(fig, "04_controls.png")
 display(Markdown("\n\n".join(nb04.split_sentence(hm, span, n, hr) for span, n in steps.items())
-                 + "\n\n" + nb04.split_story(hm, steps["train_horizon"])))
+                 + "\n\n" + nb04.split_story(hm, steps["train_horizon"], hr)))
 
 # %% [markdown]
 # The same dreams step by step, beside reality: on the left where the block is, on the right how
@@ -405,7 +405,7 @@ alive = ~np.isnan(real_roll.rewards)
 fig = nb04.fig_distribution_shift(real_roll, dream_roll, np.where(alive, at_wall(real_roll.obs[1:]), np.nan),
                                   float(at_wall(res_h.data.train_obs).mean()), replay, expert_replay, cfg.seq_len)
 show(fig, "04_distribution_shift.png")
-display(Markdown(nb04.shift_sentence(res_h.metrics)))
+display(Markdown(nb04.shift_sentence(res_h.metrics, replay=replay, expert_replay=expert_replay)))
 ask(SELF_CHECKS["shift"], "")
 
 # %% [markdown]

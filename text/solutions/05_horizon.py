@@ -175,8 +175,8 @@ M = {key: res.metrics for key, res in sweep.items()}
 display(Markdown(nb05.sweep_table(M, n_eval)))
 
 # %% [markdown]
-# The same numbers as a picture. Each dot is one actor seed; the black bar is their mean with a 95%
-# interval from the seeds' own spread.
+# The same numbers as a picture. Each dot is one actor seed (coloured by horizon, drawn just left of its
+# horizon); the black bar beside the dots is their mean with a 95% interval from the seeds' own spread.
 
 # %%
 by = lambda key: nb05.by_horizon(M, key)        # {horizon: [value per actor seed]}
@@ -212,7 +212,8 @@ gain = {w: {h: [t - u for t, u in zip(by(f"trained_{w}_return_per_step_eval_hori
 reconcile("ex2", nb05.ex2_verdict(gaps),
           nb05.reconcile_text(gaps, n_eval, cfg.eval_horizon) + "\n"
           + nb05.worlds_sentence(imagined, real, successes, n_eval).replace("**", "") + "\n\n"
-          + nb05.mechanism_text(terms["training"], gain["dream"], gain["real"], by("gap_training_train_horizon")))
+          + nb05.mechanism_text(terms["training"], gain["dream"], gain["real"], by("gap_training_train_horizon"),
+                                gaps=gaps, predicted=receipt.choice))
 
 # %% [markdown] nbgrader={"grade": false, "grade_id": "ex2_order", "locked": true, "points": 1, "schema_version": 3, "solution": false, "task": true}
 # **Completion point (Exercise 2).** Earned from the receipts in your cell outputs: the prediction
@@ -233,6 +234,11 @@ ask(SELF_CHECKS["negative_gap"], "")
 # reality. Here is that split for every run of the sweep, over the whole evaluation, and then the gap
 # split the other way: into the reward's position half (where the block is) and yaw half (how it is
 # turned).
+#
+# Before you look at the numbers, answer this one:
+
+# %%
+ask(SELF_CHECKS["drift_same"], "")
 
 # %%
 fig = nb05.fig_gap_terms(terms, gaps)
@@ -246,9 +252,6 @@ display(Markdown(nb05.rule_text(len(EX2_ACTOR_SEEDS)) + "\n\n"
                                                  by("gap_drift_yaw_eval_horizon"),
                                                  (m0["zero_dream_final_yaw_err_deg"], m0["zero_real_final_yaw_err_deg"]))
                  + "\n\n" + nb05.own_horizon_sentence(by("imagination_gap_train_horizon"))))
-
-# %%
-ask(SELF_CHECKS["drift_same"], "")
 
 # %% [markdown]
 # Step by step: the mean distance of the block from the target over the evaluation, in the dream

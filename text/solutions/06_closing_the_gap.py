@@ -354,7 +354,8 @@ with torch.no_grad():
     package = ens.wm.disagreement(torch.stack(states), T["std"])
 print(f"your disagreement along the evaluation dream: {float(mine.mean()):.4f} m; the package's: "
       f"{float(package.mean()):.4f} m")
-display(Markdown(nb06.ensemble_sentence(b, ens.metrics, penalty=1.0)))
+display(Markdown(nb06.ensemble_sentence(b, ens.metrics, penalty=1.0,
+                                        train_disagreement=ens.history.get("imag_disagreement"))))
 
 # %%
 ask(SELF_CHECKS["shared_bias"], "")

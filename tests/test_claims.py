@@ -1,0 +1,95 @@
+"""Claims about the learner's run (pusht/nb/claims.py) against the table `make claims` recorded.
+
+benchmarks/claims.json holds every claim notebooks 03-06 evaluated on seeds 0-5, with the numbers
+each predicate read. Here every predicate is evaluated again on those numbers: a fixed sentence
+(``fixed=True``) that is false on a recorded seed fails, a predicate that no longer gives the
+recorded outcome fails (its code changed: run make claims again), and so does a registered claim
+that no recorded run ever evaluated."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from pusht.nb import claims
+
+ROOT = Path(__file__).resolve().parents[1]
+TABLE = ROOT / "benchmarks" / "claims.json"
+
+
+@pytest.fixture(scope="module")
+def table():
+    assert TABLE.exists(), "benchmarks/claims.json is missing: run make claims"
+    return json.loads(TABLE.read_text())
+
+
+@pytest.fixture(scope="module")
+def registry():
+    return claims.load_all()
+
+
+def test_the_table_covers_seeds_0_to_5_of_notebooks_03_to_06_at_the_default_config(table):
+    assert table["config"] == "default"
+    assert set(table["seeds"]) >= {0, 1, 2, 3, 4, 5}
+    assert set(table["notebooks"]) == {"03_imagination_actor", "04_imagination_gap", "05_horizon",
+                                       "06_closing_the_gap"}
+    assert table["host"] and table["commit"]
+    seen = {(r["notebook"], r["seed"]) for r in table["records"]}
+    missing = {(nb, s) for nb in table["notebooks"] for s in table["seeds"]} - seen
+    assert not missing, f"no claim recorded for {sorted(missing)}"
+
+
+def test_every_registered_claim_was_recorded(table, registry):
+    recorded = {r["claim"] for r in table["records"]}
+    never = sorted(set(registry) - recorded)
+    assert not never, f"claims no recorded run evaluated: {never} (run make claims)"
+
+
+def test_every_recorded_claim_is_still_registered_and_gives_the_recorded_outcome(table, registry):
+    changed = []
+    for r in table["records"]:
+        assert r["claim"] in registry, f"{r['claim']} is in the table but no longer registered (run make claims)"
+        if bool(registry[r["claim"]].predicate(**r["inputs"])) != r["holds"]:
+            changed.append(f"{r['claim']} seed {r['seed']}")
+    assert not changed, f"predicates that no longer give the recorded outcome: {changed[:10]} (run make claims)"
+
+
+def test_no_fixed_claim_is_false_on_a_recorded_seed(table, registry):
+    false = sorted({f"{r['claim']} (seed {r['seed']}): {registry[r['claim']].says}" for r in table["records"]
+                    if registry[r["claim"]].fixed and not registry[r["claim"]].predicate(**r["inputs"])})
+    assert not false, "fixed sentences false on a recorded seed:\n" + "\n".join(false)
+
+
+def test_a_claim_records_what_it_read_and_logs_it(tmp_path, monkeypatch):
+    log = tmp_path / "log.jsonl"
+    monkeypatch.setenv(claims.LOG_ENV, str(log))
+
+    @claims.claim("99.test_positive", "x is positive")
+    def positive(*, x):
+        return x > 0
+
+    try:
+        before = len(claims.LEDGER)
+        assert positive(x=0.5) is True and positive(x=-1) is False
+        assert claims.LEDGER[before:] == [
+            {"claim": "99.test_positive", "holds": True, "fixed": False, "inputs": {"x": 0.5}},
+            {"claim": "99.test_positive", "holds": False, "fixed": False, "inputs": {"x": -1}}]
+        assert [json.loads(line)["holds"] for line in log.read_text().splitlines()] == [True, False]
+        assert claims.note_if_false(True, positive) == ""
+        assert "99.test_positive" in claims.note_if_false(False, positive)
+        with pytest.raises(ValueError, match="registered twice"):
+            @claims.claim("99.test_positive", "another")
+            def other(*, x):
+                return True
+    finally:
+        claims.REGISTRY.pop("99.test_positive", None)
+
+
+def test_numpy_inputs_are_recorded_as_plain_numbers():
+    import numpy as np
+
+    assert claims._plain(np.float32(0.25)) == 0.25 and isinstance(claims._plain(np.float64(1)), float)
+    assert claims._plain([np.int64(2), 3.0]) == [2, 3.0]
+    assert claims._plain({"a": np.array([1.0, 2.0])}) == {"a": [1.0, 2.0]}
