@@ -57,7 +57,7 @@ from pusht.nb import horizon as nb05
 from pusht.nb import setup
 from pusht.nb.horizon import SELF_CHECKS
 from pusht.page import PAGE  # the chapter page's own figures: quoted for comparison only
-from pusht.predict import lock_prediction, reconcile, run_exercise
+from pusht.predict import lock_prediction, prediction, reconcile, run_exercise
 from pusht.selfcheck import ask
 from pusht.sweep import run_many
 
@@ -213,7 +213,7 @@ reconcile("ex2", nb05.ex2_verdict(gaps),
           nb05.reconcile_text(gaps, n_eval, cfg.eval_horizon) + "\n"
           + nb05.worlds_sentence(imagined, real, successes, n_eval).replace("**", "") + "\n\n"
           + nb05.mechanism_text(terms["training"], gain["dream"], gain["real"], by("gap_training_train_horizon"),
-                                gaps=gaps, predicted=receipt.choice))
+                                gaps=gaps, predicted=getattr(prediction("ex2"), "choice", None)))
 
 # %% [markdown] nbgrader={"grade": false, "grade_id": "ex2_order", "locked": true, "points": 1, "schema_version": 3, "solution": false, "task": true}
 # **Completion point (Exercise 2).** Earned from the receipts in your cell outputs: the prediction
