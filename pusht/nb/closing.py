@@ -62,7 +62,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
@@ -70,7 +69,7 @@ from ..env import ARENA_HALF, CONTROL_DT, OBS_NAMES, SUCCESS_POS
 from ..selfcheck import Question
 from .claims import claim
 from .gap import NEAR
-from .stats import LEVEL, MIN_REWARD_EFFECT, Test, outcome as _test_outcome, t_quantile
+from .stats import LEVEL, MIN_REWARD_EFFECT, Test, k_for, outcome as _test_outcome
 from . import figure
 
 # 1 mm: the resolution at which the model's errors are read as changed. Physically: a thirtieth of
@@ -112,12 +111,6 @@ EX3_NOTE = ("\"Shrinks\" means: the gap's size |imagined minus real reward per s
             "opposite one. \"Rises above 0%\" means: more real successes after the last round than in round 0, "
             "where one success counts (a success is an event, not an estimate).")
 
-
-@lru_cache(maxsize=None)
-def k_for(n_starts: int, level: float = LEVEL) -> float:
-    """The threshold in standard errors for a mean over ``n_starts`` evaluation starts: Student's t,
-    two-sided ``level``, at n_starts - 1 degrees of freedom."""
-    return t_quantile(n_starts - 1, level)
 
 
 # --- the claims: every run-dependent sentence of notebook 06 is decided by one of these ---------------

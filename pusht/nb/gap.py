@@ -18,7 +18,7 @@ from ..env import SUCCESS_ANG, SUCCESS_POS, obs_to_pose
 from ..selfcheck import Question
 from . import figure
 from .claims import claim, finite
-from .stats import LEVEL, MIN_REWARD_EFFECT, t_quantile, welch
+from .stats import LEVEL, MIN_REWARD_EFFECT, k_for, welch
 
 # The default config's number of held-out starts (cfg.eval_episodes), for metrics that do not say.
 DEFAULT_STARTS = 30
@@ -28,7 +28,7 @@ def k_se(n: int | None = None) -> float:
     """k of every verdict here: the two-sided LEVEL point of Student's t at n - 1 degrees of
     freedom, n the number of evaluation starts (DEFAULT_STARTS when not given)."""
     n = DEFAULT_STARTS if n is None else int(n)
-    return t_quantile(max(n, 2) - 1)
+    return k_for(max(n, 2))
 
 
 def _k(m: dict | None = None, n: int | None = None) -> float:

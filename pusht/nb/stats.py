@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -59,6 +60,13 @@ def t_quantile(df: float, level: float = LEVEL) -> float:
         mid = (lo + hi) / 2
         lo, hi = (mid, hi) if _t_cdf(mid, df) < target else (lo, mid)
     return (lo + hi) / 2
+
+
+@lru_cache(maxsize=None)
+def k_for(n_starts: int, level: float = LEVEL) -> float:
+    """The threshold in standard errors for a mean over ``n_starts`` evaluation starts: Student's t,
+    two-sided ``level``, at n_starts - 1 degrees of freedom (cached: every verdict asks for it)."""
+    return t_quantile(n_starts - 1, level)
 
 
 def outcome(diff: float, bar: float, min_effect: float = 0.0) -> str:
