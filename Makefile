@@ -12,6 +12,9 @@
 #   make times    make chapter, and record each notebook's measured time -> pusht/nb/times.json
 #   make pair     sync solutions/*.ipynb with their text twins text/solutions/*.py (jupytext)
 #   make claims   run notebooks 03-06 on seeds 0-5, record every claim they check -> benchmarks/claims.*
+#   make site     make chapter, then the chapter site (Jupyter Book 1.x, offline) -> runs/site/html/index.html
+#   make lanes    the slow lanes CI runs after make test: the smoke site in a real browser, the learner's
+#                 path through JupyterLab, Colab's stack (make colab-check)
 PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
@@ -19,7 +22,8 @@ STAMP  := $(VENV)/.installed
 
 export PATH := $(abspath $(VENV))/bin:$(PATH)
 
-.PHONY: setup sandbox icu browser chapter run test bench meta claims pair times release grade lab clean
+.PHONY: setup sandbox icu browser chapter run test bench meta claims pair times release grade lab clean \
+        site site-deps site-smoke lanes colab-check
 
 setup: $(STAMP)
 
@@ -112,6 +116,29 @@ pair: setup
 claims: setup
 	$(PY) scripts/claims.py --record
 
+# The chapter site is built by Jupyter Book 1.x (Sphinx), which builds offline; Jupyter Book 2
+# fetches its theme at build time. Its pins are in requirements.txt as comments that pip does not
+# read (a laptop that never builds the site does not need Sphinx): this target installs them.
+SITE_PINS := $(shell grep -o -E '(jupyter-book|sphinx-mathjax-offline)==[0-9][0-9a-z.]*' requirements.txt)
+
+site-deps: setup
+	@$(PY) -c "import importlib.metadata as m, sys; want = dict(p.split('==') for p in '$(SITE_PINS)'.split()); \
+	  sys.exit(any(m.version(k) != v for k, v in want.items()))" 2>/dev/null \
+	  || $(PY) -m pip install --quiet $(SITE_PINS)
+
+site: chapter site-deps
+	$(PY) -m chapter_site --run runs/chapter --out runs/site
+
+# CI's site: the smoke run (seconds per notebook), built the same way.
+site-smoke: setup site-deps
+	$(PY) scripts/chapter.py --smoke --out runs/chapter-smoke
+	$(PY) -m chapter_site --run runs/chapter-smoke --out runs/site-smoke
+
+# The slow lanes (.ci/lanes): the tests marked `lane` (tests/test_site_browser.py,
+# tests/test_learner_path.py, tests/test_colab_lane.py), with what they need installed first.
+lanes: setup browser site-smoke colab-check
+	SITE_HTML=runs/site-smoke/html $(PY) -m pytest -q -m lane
+
 release: setup
 	$(PY) scripts/release.py
 
@@ -121,6 +148,13 @@ grade: setup sandbox icu
 
 lab: setup
 	$(VENV)/bin/jupyter lab notebooks/
+
+# The Colab lane: every notebook in smoke mode on Colab's Python and packages (colab/stack.txt),
+# each alone in an empty folder, its package installed by its own Colab install cell from a local
+# snapshot of this working tree. Makes .venv-colab the first time (Python 3.13 from pyenv or PATH;
+# several GB, torch's CUDA build from PyPI), then reuses it while colab/stack.txt is unchanged.
+colab-check: setup
+	$(PY) scripts/colab_check.py
 
 clean:
 	rm -rf runs .pytest_cache

@@ -197,12 +197,14 @@ def world_model_stage(cfg: Config, cache_dir=None, model_cache=None, log=print,
 
 
 def agent_stage(cfg: Config, stage: WorldModelStage, model_cache=None, log=print, progress=None,
-                reward_fn=reward_from_obs, return_fn=lambda_return, loss_fn=None) -> AgentStage:
+                reward_fn=reward_from_obs, return_fn=lambda_return, loss_fn=None, watch=None) -> AgentStage:
     """Step 2: an actor-critic learns purely inside the frozen world model of ``stage``.
 
     Reseeded on its own, so a cached world model gives the same agent as a fresh one.
     ``reward_fn``, ``return_fn`` and ``loss_fn`` let a learner's own implementations drive the
-    training (``loss_fn=None``: the losses of ``cfg.critic_wiring``).
+    training (``loss_fn=None``: the losses of ``cfg.critic_wiring``). ``watch(agent, real_floor)``,
+    if given, is called at every monitor point with the agent as it is then (the site's iteration
+    scrubber keeps copies); it only watches, and a watched stage is never cached.
     """
     def build():
         t0 = time.perf_counter()
@@ -219,7 +221,10 @@ def agent_stage(cfg: Config, stage: WorldModelStage, model_cache=None, log=print
 
         def monitor(a):   # the "real floor": the current policy in the real sim, never trained on
             roll = real_rollout(stage.wm, policy_of(a), monitor_seeds, cfg.eval_horizon, mean, std)
-            return float(roll.return_per_step.mean())
+            floor = float(roll.return_per_step.mean())
+            if watch is not None:
+                watch(a, floor)
+            return floor
 
         with gc_paused():
             hist = train_in_imagination(stage.wm, agent, T["train_obs"][:, : cfg.context + 1],
@@ -229,7 +234,8 @@ def agent_stage(cfg: Config, stage: WorldModelStage, model_cache=None, log=print
                                         loss_fn=loss_fn)
         return AgentStage(agent, init_agent, hist, time.perf_counter() - t0)
 
-    custom = reward_fn is not reward_from_obs or return_fn is not lambda_return or loss_fn is not None
+    custom = (reward_fn is not reward_from_obs or return_fn is not lambda_return or loss_fn is not None
+              or watch is not None)
     return _cached(None if custom else _cache_path(model_cache, "agent", cfg, AGENT_FIELDS, AGENT_MODULES), build)
 
 

@@ -455,6 +455,8 @@ def main(argv=None) -> int:
         peak = f", kernel peak {r['peak_rss_mb']:.0f} MB" if r.get("measured") else ""
         print(f"  done in {r['seconds']:.0f} s{peak} -> {out / nb.name}", flush=True)
     print(f"\nall notebooks ran in {time.perf_counter() - t0:.0f} s; figures in {out / 'figures'}\n")
+    from chapter_site.scrubber import export     # the site's iteration scrubber (make site)
+    export(out, args.smoke)
     if args.record_times:
         print(f"notebook times recorded in {record_times(out)}")
     if list((out / "metrics").glob("seed*.json")):

@@ -1,0 +1,5 @@
+import sys
+
+from .book import main
+
+sys.exit(main())

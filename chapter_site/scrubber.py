@@ -1,0 +1,136 @@
+"""The iteration scrubber's data: the chapter's seed-0 policy at every stage of its training.
+
+``make chapter`` calls :func:`export` after the notebooks have run. It trains seed 0's actor again
+in the world model the notebooks cached, exactly as the notebooks did (the same seeds; only the
+real-floor monitor looks more often, and the monitor never touches training), keeps a copy of the
+actor at every monitor point, and runs each copy from one held-out start in the dream and in the
+real simulator. The last copy must equal the policy the notebooks trained and evaluated, bit for
+bit: :func:`export` checks that against the cached agent and refuses to write otherwise.
+
+The file it writes (``<out>/site/scrubber.json``) holds, per kept iteration, the imagined and
+the real reward per step on that start, and both worlds' block and pusher positions at every
+control step, in millimetres and degrees; plus the training curves for the landing page.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import os
+import platform
+import subprocess
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+import torch
+
+FRAMES = 21            # kept iterations: 0, then every imag_iters/20, the last included
+CURVE_POINTS = 80      # the landing page's curves keep at most this many points each
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _commit() -> str:
+    try:
+        return subprocess.run(["git", "describe", "--always", "--dirty"], cwd=ROOT, capture_output=True,
+                              text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def _host() -> str:
+    cpu = platform.processor() or platform.machine()
+    info = Path("/proc/cpuinfo")
+    if info.exists():
+        cpu = next((line.split(":", 1)[1].strip() for line in info.read_text().splitlines()
+                    if line.startswith("model name")), cpu)
+    return f"{cpu}, {os.cpu_count()} cores, torch {torch.__version__}"
+
+
+def _thin(values, points: int = CURVE_POINTS) -> dict:
+    """``values`` (one per step) as at most ``points`` means of consecutive blocks, with the step
+    at each block's centre: a curve that keeps its shape at a fraction of the size."""
+    v = np.asarray(values, dtype=float)
+    if len(v) == 0:
+        return {"x": [], "y": []}
+    edges = np.linspace(0, len(v), min(points, len(v)) + 1).astype(int)
+    xs = [float((a + b - 1) / 2) for a, b in zip(edges[:-1], edges[1:])]
+    ys = [float(v[a:b].mean()) for a, b in zip(edges[:-1], edges[1:])]
+    return {"x": [round(x, 1) for x in xs], "y": [round(y, 5) for y in ys]}
+
+
+def _world(rollout) -> dict:
+    """One start's trajectory in one world: mean reward per step, pusher (x, y) and block
+    (x, y, yaw) at every step, in mm and degrees."""
+    from pusht.env import obs_to_pose
+
+    pusher, tee = obs_to_pose(rollout.obs[:, 0])          # (T+1, 2), (T+1, 3)
+    return {"reward_per_step": round(float(rollout.return_per_step[0]), 5),
+            "final_block_to_target_m": round(float(rollout.final_tee_dist[0]), 4),
+            "pusher_mm": np.rint(pusher * 1000).astype(int).tolist(),
+            "block_mm_deg": np.column_stack([np.rint(tee[:, :2] * 1000), np.rint(np.degrees(tee[:, 2]))])
+            .astype(int).tolist()}
+
+
+def _same_weights(a: dict, b: dict) -> bool:
+    return a.keys() == b.keys() and all(torch.equal(a[k], b[k]) for k in a)
+
+
+def export(out: Path, smoke: bool, seed: int = 0, log=print) -> Path:
+    """Write ``out/site/scrubber.json`` for the chapter run in ``out`` (its model cache is
+    ``out/cache``, as the notebooks' is ``OUT/cache``). Returns the path."""
+    from pusht.config import make_config
+    from pusht.data import EVAL_SEED_BASE, start_seeds
+    from pusht.dreamer import agent_stage, world_model_stage
+    from pusht.evaluate import dream_rollout, policy_of, real_rollout
+
+    out = Path(out)
+    cache = out / "cache"
+    cfg = make_config(smoke=smoke, seed=seed, out=out)
+    ws = world_model_stage(cfg, cache_dir=cache, model_cache=cache, log=None)
+    chapter = agent_stage(cfg, ws, model_cache=cache, log=None)       # the notebooks' own agent
+    watched = cfg.replace(monitor_every=max(cfg.imag_iters // (FRAMES - 1), 1))
+    copies: list[tuple[dict, float]] = []
+    stage = agent_stage(watched, ws, log=None,
+                        watch=lambda agent, floor: copies.append((copy.deepcopy(agent.state_dict()), floor)))
+    if not _same_weights(copies[-1][0], chapter.agent.state_dict()):
+        raise RuntimeError("the scrubber's retrained actor differs from the one the notebooks trained: "
+                           "training is not deterministic here, so the scrubber would show another policy")
+
+    T = ws.data.torch(cfg.device)
+    mean, std = T["mean"], T["std"]
+    start = int(start_seeds(EVAL_SEED_BASE, seed, 1)[0])
+    agent = copy.deepcopy(stage.agent)
+    agent.eval()
+    frames = []
+    iters = [int(i) for i in stage.history["monitor_iters"]]
+    imag = stage.history["imag_reward"]
+    for it, (weights, floor) in zip(iters, copies):
+        agent.load_state_dict(weights)
+        real = real_rollout(ws.wm, policy_of(agent), [start], cfg.eval_horizon, mean, std)
+        dream = dream_rollout(ws.wm, policy_of(agent), real.obs[0], cfg.eval_horizon, mean, std)
+        frames.append({"iteration": it,
+                       "imagined_reward_train": round(float(imag[min(it, len(imag) - 1)]), 5),
+                       "real_floor": round(floor, 5),
+                       "dream": _world(dream), "real": _world(real)})
+    data = {
+        "written_by": "chapter_site/scrubber.py (make chapter)",
+        "measured_at": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "commit": _commit(), "host": _host(),
+        "seed": seed, "config": "smoke" if smoke else "default",
+        "start_seed": start, "horizon": cfg.eval_horizon, "control_dt_s": 0.1,
+        "imag_iters": cfg.imag_iters, "monitor_starts": cfg.monitor_episodes,
+        "same_as_chapter_agent": True,
+        "frames": frames,
+        "curves": {"imagined_reward": _thin(stage.history["imag_reward"]),
+                   "real_floor": {"x": iters, "y": [f["real_floor"] for f in frames]},
+                   "wm_recon": _thin(ws.history["recon"]), "wm_dyn": _thin(ws.history["dyn"])},
+    }
+    path = out / "site" / "scrubber.json"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(data, separators=(",", ":")) + "\n")
+    if log:
+        log(f"scrubber: {len(frames)} iterations of seed {seed}'s actor, start {start}, "
+            f"{path.stat().st_size / 1024:.0f} KB -> {path}")
+    return path
