@@ -134,9 +134,10 @@ site-smoke: setup site-deps
 	$(PY) scripts/chapter.py --smoke --out runs/chapter-smoke
 	$(PY) -m chapter_site --run runs/chapter-smoke --out runs/site-smoke
 
-# The slow lanes (.ci/lanes): the tests marked `lane` (tests/test_site_browser.py,
-# tests/test_learner_path.py, tests/test_colab_lane.py), with what they need installed first.
-lanes: setup browser site-smoke colab-check
+# The slow lanes (.ci/lanes): the tests marked `lane`, with what they need installed first:
+# tests/test_site_browser.py (the smoke site in Chromium), tests/test_learner_path.py (JupyterLab, then
+# the grader) and tests/test_colab_lane.py (which runs make colab-check's script).
+lanes: setup browser site-smoke
 	SITE_HTML=runs/site-smoke/html $(PY) -m pytest -q -m lane
 
 release: setup

@@ -66,7 +66,7 @@ def curves_html(data: dict) -> str:
          {"x": c["wm_dyn"]["x"], "y": c["wm_dyn"]["y"], "label": "dynamics", "color": svg.MUTED, "dash": "5 3"}],
         "world-model update", "loss (MSE, normalised units; log scale)", "the world model's losses",
         log_y=True, chart_id="curve-wm")
-    return ('<section class="panel" id="curves"><h2>The actor trained; reality did not follow</h2>'
+    return ('<section class="panel" id="curves"><h2>Training in the dream, measured in both worlds</h2>'
             f'<p class="meta">{provenance(data)}. The imagined curve is the mean reward per step of each '
             "training batch of dreams (averaged over blocks of iterations); the real floor is the same "
             f"policy in the real simulator on {data['monitor_starts']} fixed starts it never trains on.</p>"
@@ -125,9 +125,9 @@ def colab_html(notebooks: list[str]) -> str:
     rows = "".join(f'<li><a href="notebooks/{Path(n).stem}.html">{escape(title)}</a> · '
                    f'<a class="colab" href="{escape(colab_url(n))}">Open in Colab</a></li>'
                    for n, title in notebooks_titles(notebooks))
-    return ('<section class="panel" id="open"><h2>Run it yourself</h2><p>Each notebook runs on Colab\'s free '
-            "tier, on Binder or on your own machine (<code>make chapter</code>); every exercise can also "
-            "be run from a terminal (<code>python -m pusht.exercise ex1</code>).</p>"
+    return ('<section class="panel" id="open"><h2>Run it yourself</h2><p>Open a notebook in Colab, or run the '
+            "chapter on your own machine (<code>make chapter</code>). The predict-then-run exercises "
+            "also run from a terminal (<code>python -m pusht.exercise ex1</code>).</p>"
             f"<ol class=\"notebooks\">{rows}</ol></section>")
 
 

@@ -5,6 +5,11 @@
 
 notebooks/ is never edited by hand. The release is nbgrader's `generate_assignment` output plus one
 badge cell at the top (Open in Colab, Binder), with the address taken from course.yaml.
+
+The Colab install cell (the first code cell of every notebook) has one source, INSTALL_CELL below:
+this script writes it, rendered with course.yaml's address, into every solutions/*.ipynb, and
+`--check` fails when a notebook's cell differs from it. Edit it here, then run `make release` and
+`make pair`.
 """
 
 from __future__ import annotations
@@ -13,6 +18,7 @@ import argparse
 import json
 import re
 import shutil
+import string
 import sys
 import tempfile
 from pathlib import Path
@@ -24,13 +30,56 @@ ROOT = Path(__file__).resolve().parents[1]
 from autograde.course import nbgrader  # noqa: E402  (one way to run nbgrader, shared with the grader)
 SOLUTIONS, RELEASE = ROOT / "solutions", ROOT / "notebooks"
 COURSE = yaml.safe_load((ROOT / "course.yaml").read_text())
-INSTALL_RE = re.compile(r"git\+https://github\.com/[^\"'@\s]+@[^\"'\s]+")
 MARKERS = ("### BEGIN SOLUTION", "### END SOLUTION", "### BEGIN HIDDEN TESTS", "### END HIDDEN TESTS",
            "BEGIN MARK SCHEME", "END MARK SCHEME")
 
 
 def install_url() -> str:
     return f"git+https://github.com/{COURSE['repository']}@{COURSE['ref']}"
+
+
+# The Colab install cell of every notebook ($install_url: install_url()). In Colab it installs the
+# chapter's package next to Colab's own torch and numpy (pyproject.toml's ranges are loose for that)
+# and prints what pip installed (pip's --report). If that ever includes torch or numpy at another
+# version than the one Colab came with, it says so, tells the learner to restart the runtime, and
+# raises, which stops a "Run all". Elsewhere (a laptop, Binder, CI) it does nothing.
+# tests/test_install_cell.py runs both branches with a fake pip; `make colab-check`
+# (scripts/colab_check.py) runs it for real on Colab's stack.
+INSTALL_CELL = string.Template("""\
+# Colab only (elsewhere this does nothing): install this chapter's package, pusht-dreamer, from GitHub,
+# next to Colab's own torch and numpy. Should the install ever change those, this cell says so and stops.
+import sys
+
+if "google.colab" in sys.modules:
+    import json, subprocess, tempfile
+    from importlib.metadata import version
+
+    package = "pusht-dreamer @ $install_url"
+    print(f"Installing {package}")
+    loaded = {name: version(name) for name in ("torch", "numpy")}   # the versions Colab came with
+    report = f"{tempfile.gettempdir()}/pusht-install.json"          # pip writes what it installed here
+    subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--report", report, package],
+                   check=True)
+    with open(report) as f:
+        new = {p["metadata"]["name"].lower(): p["metadata"]["version"] for p in json.load(f)["install"]}
+    print("Installed:", ", ".join(f"{name} {v}" for name, v in new.items()) or "nothing new")
+    changed = [f"{name} {loaded[name]} -> {new[name]}" for name in loaded
+               if name in new and new[name] != loaded[name]]
+    if changed:
+        print(f"The install replaced Colab's {', '.join(changed)}: Python must restart to use it.")
+        raise RuntimeError("Restart the runtime (Runtime > Restart session), then run this notebook again.")
+    print(f"Colab's torch {loaded['torch']} and numpy {loaded['numpy']} are unchanged.")""")
+
+
+def install_cell() -> str:
+    """The Colab install cell's source, with course.yaml's address."""
+    return INSTALL_CELL.substitute(install_url=install_url())
+
+
+def install_cell_index(cells) -> int | None:
+    """Index of a notebook's Colab install cell: its first code cell that mentions google.colab."""
+    return next((i for i, c in enumerate(cells)
+                 if c["cell_type"] == "code" and "google.colab" in "".join(c["source"])), None)
 
 
 def colab_url(name: str) -> str:
@@ -51,17 +100,13 @@ def badge_cell(name: str):
 
 
 def refresh_install_cells() -> list[Path]:
-    """Point every solution notebook's Colab install cell at course.yaml's address."""
+    """Write install_cell() into every solution notebook's Colab install cell."""
     changed = []
     for path in sorted(SOLUTIONS.glob("*.ipynb")):
         nb = nbformat.read(path, as_version=4)
-        dirty = False
-        for cell in nb.cells:
-            if cell.cell_type == "code" and "google.colab" in cell.source:
-                new = INSTALL_RE.sub(install_url(), cell.source)
-                dirty |= new != cell.source
-                cell.source = new
-        if dirty:
+        i = install_cell_index(nb.cells)
+        if i is not None and nb.cells[i].source != install_cell():
+            nb.cells[i].source = install_cell()
             nbformat.write(nb, path)
             changed.append(path)
     return changed
@@ -160,9 +205,12 @@ def main(argv=None) -> int:
             nb = json.loads(path.read_text())
             if any(c.get("outputs") for c in nb["cells"]):
                 problems.append(f"solutions/{path.name} has outputs committed: clear them")
-            if any(INSTALL_RE.search("".join(c["source"])) and install_url() not in "".join(c["source"])
-                   for c in nb["cells"]):
-                problems.append(f"solutions/{path.name}: Colab install cell differs from course.yaml")
+            i = install_cell_index(nb["cells"])
+            if i is None:
+                problems.append(f"solutions/{path.name} has no Colab install cell")
+            elif "".join(nb["cells"][i]["source"]) != install_cell():
+                problems.append(f"solutions/{path.name}: Colab install cell differs from INSTALL_CELL in "
+                                "scripts/release.py (with course.yaml's address): run `make release`")
     if problems:
         print("\n".join(problems))
         return 1

@@ -369,6 +369,13 @@ def ex3_verdict(rounds: list) -> str:
     return {(True, True): "a", (True, False): "b", (False, False): "c", (False, True): "d"}[(shrank, rose)]
 
 
+def ex3_reconciliation(rounds: list) -> tuple[str, str]:
+    """Exercise 3's reconciliation, ``(measured letter, explanation)``, as notebook 06 hands them to
+    ``pusht.predict.reconcile``: from the loop's rounds (``loop.run_loop(...).rounds``). One
+    function, so that the notebook and ``python -m pusht.exercise ex3`` print the same words."""
+    return ex3_verdict(rounds), reconcile_text(rounds).replace("**", "")
+
+
 # --- formatting ---------------------------------------------------------------------------------
 def _se(se: float) -> str:
     return f"{se:.3f}" if se >= 0.001 or se == 0 else f"{se:.1e}"

@@ -322,6 +322,15 @@ def ex1_note(n: int | None = None) -> str:
     return f"(± is one standard error over the starts; 'well above' means {test_words(k_se(n))}.)"
 
 
+def ex1_reconciliation(metrics: dict, n_eval: int) -> tuple[str, str]:
+    """Exercise 1's reconciliation, ``(measured letter, explanation)``, as notebook 04 hands them to
+    ``pusht.predict.reconcile``: from ``{seed: evaluation metrics}`` (``two_world_eval``'s, with
+    ``eval_episodes``) for the ``n_eval`` starts. One function, so that the notebook and
+    ``python -m pusht.exercise ex1`` print the same words."""
+    return (ex1_verdict(list(metrics.values())),
+            "\n".join(ex1_sentence(s, m, n_eval) for s, m in metrics.items()) + "\n" + ex1_note(n_eval))
+
+
 def dream_check_text(mismatch: float) -> str:
     """Does the learner's ``dream`` reproduce the package's imagined reward?"""
     if dream_reproduces_package(mismatch=mismatch):

@@ -321,6 +321,32 @@ def ex2_verdict(gaps: dict) -> str:
     return VERDICT_LETTER[kind if kind in ("up", "down") else "same"]
 
 
+# Exercise 2's sweep in notebook 05: the horizons compared, and the actor seeds at each.
+EX2_HORIZONS, EX2_ACTOR_SEEDS = (5, 15, 30), (0, 1, 2)
+
+
+def ex2_reconciliation(metrics: dict, n_eval: int, eval_horizon: int,
+                       predicted: str | None = None) -> tuple[str, str]:
+    """Exercise 2's reconciliation, ``(measured letter, explanation)``, as notebook 05 hands them to
+    ``pusht.predict.reconcile``: from the sweep's ``{(horizon, actor_seed): metrics}``, the
+    ``n_eval`` evaluation starts of ``eval_horizon`` steps, and the ``predicted`` letter (the
+    explanation answers it). One function, so that the notebook and ``python -m pusht.exercise
+    ex2`` print the same words."""
+    def by(key):
+        return by_horizon(metrics, key)
+
+    gaps, imagined, real = by("imagination_gap"), by("imagined_return_per_step"), by("real_return_per_step")
+    successes = {h: [round(v * n_eval) for v in vals] for h, vals in by("real_success_rate").items()}
+    gain = {w: {h: [t - u for t, u in zip(by(f"trained_{w}_return_per_step_eval_horizon")[h],
+                                          by(f"untrained_{w}_return_per_step_eval_horizon")[h])] for h in gaps}
+            for w in ("dream", "real")}                                # what training changed, per world
+    return (ex2_verdict(gaps),
+            reconcile_text(gaps, n_eval, eval_horizon) + "\n"
+            + worlds_sentence(imagined, real, successes, n_eval).replace("**", "") + "\n\n"
+            + mechanism_text(by("gap_training_eval_horizon"), gain["dream"], gain["real"],
+                             by("gap_training_train_horizon"), gaps=gaps, predicted=predicted))
+
+
 # --- sentences ----------------------------------------------------------------------------------
 SIGN_WORDS = {"up": "clearly positive", "down": "clearly negative",
               "small": "told apart from zero, but smaller than the minimum effect that matters",

@@ -25,14 +25,29 @@
 # inherits it.
 
 # %%
-# Colab only: install this chapter's package next to Colab's own torch (nothing happens elsewhere).
-import subprocess
+# Colab only (elsewhere this does nothing): install this chapter's package, pusht-dreamer, from GitHub,
+# next to Colab's own torch and numpy. Should the install ever change those, this cell says so and stops.
 import sys
 
 if "google.colab" in sys.modules:
-    subprocess.run([sys.executable, "-m", "pip", "install", "-q",
-                    "pusht-dreamer @ git+https://github.com/zero2robot/world-models-2-dreamer@main"],
+    import json, subprocess, tempfile
+    from importlib.metadata import version
+
+    package = "pusht-dreamer @ git+https://github.com/zero2robot/world-models-2-dreamer@main"
+    print(f"Installing {package}")
+    loaded = {name: version(name) for name in ("torch", "numpy")}   # the versions Colab came with
+    report = f"{tempfile.gettempdir()}/pusht-install.json"          # pip writes what it installed here
+    subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--report", report, package],
                    check=True)
+    with open(report) as f:
+        new = {p["metadata"]["name"].lower(): p["metadata"]["version"] for p in json.load(f)["install"]}
+    print("Installed:", ", ".join(f"{name} {v}" for name, v in new.items()) or "nothing new")
+    changed = [f"{name} {loaded[name]} -> {new[name]}" for name in loaded
+               if name in new and new[name] != loaded[name]]
+    if changed:
+        print(f"The install replaced Colab's {', '.join(changed)}: Python must restart to use it.")
+        raise RuntimeError("Restart the runtime (Runtime > Restart session), then run this notebook again.")
+    print(f"Colab's torch {loaded['torch']} and numpy {loaded['numpy']} are unchanged.")
 
 # %% tags=["parameters"]
 SEED = 0                    # master seed: data, model init, evaluation starts

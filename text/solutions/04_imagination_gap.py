@@ -35,14 +35,29 @@
 # 5. see how the real DreamerV3 handles the same problem.
 
 # %%
-# Colab only: install this chapter's package next to Colab's own torch (nothing happens elsewhere).
-import subprocess
+# Colab only (elsewhere this does nothing): install this chapter's package, pusht-dreamer, from GitHub,
+# next to Colab's own torch and numpy. Should the install ever change those, this cell says so and stops.
 import sys
 
 if "google.colab" in sys.modules:
-    subprocess.run([sys.executable, "-m", "pip", "install", "-q",
-                    "pusht-dreamer @ git+https://github.com/zero2robot/world-models-2-dreamer@main"],
+    import json, subprocess, tempfile
+    from importlib.metadata import version
+
+    package = "pusht-dreamer @ git+https://github.com/zero2robot/world-models-2-dreamer@main"
+    print(f"Installing {package}")
+    loaded = {name: version(name) for name in ("torch", "numpy")}   # the versions Colab came with
+    report = f"{tempfile.gettempdir()}/pusht-install.json"          # pip writes what it installed here
+    subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--report", report, package],
                    check=True)
+    with open(report) as f:
+        new = {p["metadata"]["name"].lower(): p["metadata"]["version"] for p in json.load(f)["install"]}
+    print("Installed:", ", ".join(f"{name} {v}" for name, v in new.items()) or "nothing new")
+    changed = [f"{name} {loaded[name]} -> {new[name]}" for name in loaded
+               if name in new and new[name] != loaded[name]]
+    if changed:
+        print(f"The install replaced Colab's {', '.join(changed)}: Python must restart to use it.")
+        raise RuntimeError("Restart the runtime (Runtime > Restart session), then run this notebook again.")
+    print(f"Colab's torch {loaded['torch']} and numpy {loaded['numpy']} are unchanged.")
 
 # %% tags=["parameters"]
 SEED = 0                    # master seed: data, model init, evaluation starts
@@ -262,8 +277,7 @@ M = {s: {**r["metrics"], "eval_episodes": n_eval} for s, r in results.items()}  
 mismatch = max(abs(M[s]["imagined_return_per_step"] - r["res"].metrics["imagined_return_per_step"])
                for s, r in results.items())
 display(Markdown(nb04.dream_check_text(mismatch)))
-reconcile("ex1", nb04.ex1_verdict(list(M.values())),
-          "\n".join(nb04.ex1_sentence(s, m, n_eval) for s, m in M.items()) + "\n" + nb04.ex1_note(n_eval))
+reconcile("ex1", *nb04.ex1_reconciliation(M, n_eval))   # the words python -m pusht.exercise ex1 prints too
 display(Markdown(nb04.exploitation_text(M, min(cfg.imag_horizon, cfg.eval_horizon))))
 
 # %% [markdown] nbgrader={"grade": false, "grade_id": "ex1_order", "locked": true, "points": 1, "schema_version": 3, "solution": false, "task": true}

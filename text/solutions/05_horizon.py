@@ -27,14 +27,29 @@
 # model error, what this chapter left out, and what to read next.
 
 # %%
-# Colab only: install this chapter's package next to Colab's own torch (nothing happens elsewhere).
-import subprocess
+# Colab only (elsewhere this does nothing): install this chapter's package, pusht-dreamer, from GitHub,
+# next to Colab's own torch and numpy. Should the install ever change those, this cell says so and stops.
 import sys
 
 if "google.colab" in sys.modules:
-    subprocess.run([sys.executable, "-m", "pip", "install", "-q",
-                    "pusht-dreamer @ git+https://github.com/zero2robot/world-models-2-dreamer@main"],
+    import json, subprocess, tempfile
+    from importlib.metadata import version
+
+    package = "pusht-dreamer @ git+https://github.com/zero2robot/world-models-2-dreamer@main"
+    print(f"Installing {package}")
+    loaded = {name: version(name) for name in ("torch", "numpy")}   # the versions Colab came with
+    report = f"{tempfile.gettempdir()}/pusht-install.json"          # pip writes what it installed here
+    subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--report", report, package],
                    check=True)
+    with open(report) as f:
+        new = {p["metadata"]["name"].lower(): p["metadata"]["version"] for p in json.load(f)["install"]}
+    print("Installed:", ", ".join(f"{name} {v}" for name, v in new.items()) or "nothing new")
+    changed = [f"{name} {loaded[name]} -> {new[name]}" for name in loaded
+               if name in new and new[name] != loaded[name]]
+    if changed:
+        print(f"The install replaced Colab's {', '.join(changed)}: Python must restart to use it.")
+        raise RuntimeError("Restart the runtime (Runtime > Restart session), then run this notebook again.")
+    print(f"Colab's torch {loaded['torch']} and numpy {loaded['numpy']} are unchanged.")
 
 # %% tags=["parameters"]
 SEED = 0                    # master seed: data, model init, evaluation starts
@@ -204,16 +219,9 @@ display(Markdown(nb05.interval_note(len(EX2_ACTOR_SEEDS))))
 
 # %%
 display(Code(inspect.getsource(nb05.gap_change), language="python"))
-successes = {h: [round(v * n_eval) for v in vals] for h, vals in by("real_success_rate").items()}
 terms = {t: by(f"gap_{t}_eval_horizon") for t in nb05.TERMS}          # the gap's three terms (below)
-gain = {w: {h: [t - u for t, u in zip(by(f"trained_{w}_return_per_step_eval_horizon")[h],
-                                      by(f"untrained_{w}_return_per_step_eval_horizon")[h])] for h in gaps}
-        for w in ("dream", "real")}                                    # what training changed, per world
-reconcile("ex2", nb05.ex2_verdict(gaps),
-          nb05.reconcile_text(gaps, n_eval, cfg.eval_horizon) + "\n"
-          + nb05.worlds_sentence(imagined, real, successes, n_eval).replace("**", "") + "\n\n"
-          + nb05.mechanism_text(terms["training"], gain["dream"], gain["real"], by("gap_training_train_horizon"),
-                                gaps=gaps, predicted=getattr(prediction("ex2"), "choice", None)))
+reconcile("ex2", *nb05.ex2_reconciliation(M, n_eval, cfg.eval_horizon,      # python -m pusht.exercise ex2
+                                          predicted=getattr(prediction("ex2"), "choice", None)))
 
 # %% [markdown] nbgrader={"grade": false, "grade_id": "ex2_order", "locked": true, "points": 1, "schema_version": 3, "solution": false, "task": true}
 # **Completion point (Exercise 2).** Earned from the receipts in your cell outputs: the prediction
