@@ -29,6 +29,24 @@ COURSE = yaml.safe_load((ROOT / "course.yaml").read_text())
 ASSIGNMENT = COURSE["assignment"]
 
 
+# The course's public addresses, from course.yaml: the student release renders them into its badges
+# and install cell (scripts/release.py), the chapter site into its links (chapter_site/).
+def install_url() -> str:
+    """What the Colab install cell gives pip: the package from the course's repository and ref."""
+    return f"git+https://github.com/{COURSE['repository']}@{COURSE['ref']}"
+
+
+def colab_url(notebook: str) -> str:
+    """The student notebook ``notebook`` (a file name) opened in Colab."""
+    return (f"https://colab.research.google.com/github/{COURSE['repository']}/blob/{COURSE['ref']}/"
+            f"notebooks/{notebook}")
+
+
+def binder_url(notebook: str) -> str:
+    """The student notebook ``notebook`` opened in JupyterLab on Binder."""
+    return f"https://mybinder.org/v2/gh/{COURSE['repository']}/{COURSE['ref']}?labpath=notebooks%2F{notebook}"
+
+
 COURSE_ID = "zero2robot-ch3.2"      # the same as in nbgrader_config.py
 
 

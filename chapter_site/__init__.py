@@ -3,5 +3,6 @@ per executed notebook and the reading list, built with Jupyter Book 1.x from a `
 
 Rooms: ``scrubber`` (the iteration scrubber's data, exported by ``make chapter``), ``svg`` (the
 static figures), ``wallclock`` (the tier table), ``colophon`` (fingerprints of the shown code),
-``landing`` (the landing page), ``book`` (assemble and build).
+``landing`` (the landing page), ``provenance`` (commit and host), ``book`` (assemble and build),
+``sphinx_ext`` (a fix to the build).
 """

@@ -26,7 +26,7 @@ from pathlib import Path
 import nbformat
 import yaml
 
-from . import landing
+from . import landing, provenance
 
 ROOT = Path(__file__).resolve().parents[1]
 BOOK = ROOT / "book"
@@ -102,14 +102,6 @@ def assemble(run: Path, src: Path, commit: str) -> list[str]:
     return notebooks
 
 
-def _commit() -> str:
-    try:
-        return subprocess.run(["git", "describe", "--always", "--dirty"], cwd=ROOT, capture_output=True,
-                              text=True, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-
-
 def weight(html: Path, page: str = "index.html") -> dict:
     """Bytes of the whole site, and of one page with every local file it references."""
     import re
@@ -126,7 +118,7 @@ def build(run: Path, out: Path) -> dict:
     """Assemble and build the site; returns the build's time and weight."""
     t0 = time.perf_counter()
     src, html = out / "src", out / "html"
-    assemble(run, src, _commit())
+    assemble(run, src, provenance.commit())
     build_dir = out / "jb"
     if build_dir.exists():
         shutil.rmtree(build_dir)

@@ -13,12 +13,11 @@ import json
 from html import escape
 from pathlib import Path
 
-import yaml
+from autograde.course import colab_url
 
 from . import colophon, svg, wallclock
 
 ROOT = Path(__file__).resolve().parents[1]
-COURSE = yaml.safe_load((ROOT / "course.yaml").read_text())
 
 # (meta.yaml key under seeds[0], label, format) for the headline; the browser test reads them back.
 HEADLINE = [
@@ -29,12 +28,6 @@ HEADLINE = [
     ("imagined_final_tee_dist", "dream: the block ends this far from the target (m)", "{:.3f}"),
     ("real_final_tee_dist", "reality: the block ends this far from the target (m)", "{:.3f}"),
 ]
-
-
-def colab_url(notebook: str) -> str:
-    """The student notebook on Colab, at the course's public address (course.yaml)."""
-    return (f"https://colab.research.google.com/github/{COURSE['repository']}/blob/{COURSE['ref']}/"
-            f"notebooks/{notebook}")
 
 
 def headline_html(meta: dict) -> str:

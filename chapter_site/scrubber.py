@@ -16,37 +16,16 @@ from __future__ import annotations
 
 import copy
 import json
-import os
-import platform
-import subprocess
 from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
 import torch
 
+from . import provenance
+
 FRAMES = 21            # kept iterations: 0, then every imag_iters/20, the last included
 CURVE_POINTS = 80      # the landing page's curves keep at most this many points each
-
-ROOT = Path(__file__).resolve().parents[1]
-
-
-def _commit() -> str:
-    try:
-        return subprocess.run(["git", "describe", "--always", "--dirty"], cwd=ROOT, capture_output=True,
-                              text=True, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-
-
-def _host() -> str:
-    cpu = platform.processor() or platform.machine()
-    info = Path("/proc/cpuinfo")
-    if info.exists():
-        cpu = next((line.split(":", 1)[1].strip() for line in info.read_text().splitlines()
-                    if line.startswith("model name")), cpu)
-    return f"{cpu}, {os.cpu_count()} cores, torch {torch.__version__}"
-
 
 def _thin(values, points: int = CURVE_POINTS) -> dict:
     """``values`` (one per step) as at most ``points`` means of consecutive blocks, with the step
@@ -117,7 +96,7 @@ def export(out: Path, smoke: bool, seed: int = 0, log=print) -> Path:
     data = {
         "written_by": "chapter_site/scrubber.py (make chapter)",
         "measured_at": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-        "commit": _commit(), "host": _host(),
+        "commit": provenance.commit(), "host": provenance.host(),
         "seed": seed, "config": "smoke" if smoke else "default",
         "start_seed": start, "horizon": cfg.eval_horizon, "control_dt_s": 0.1,
         "imag_iters": cfg.imag_iters, "monitor_starts": cfg.monitor_episodes,

@@ -393,9 +393,7 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     t_start = time.perf_counter()
 
-    import yaml
-
-    course = yaml.safe_load((ROOT / "course.yaml").read_text())
+    from autograde.course import COURSE as course
     stack = parse_stack(STACK_FILE.read_text())
     notebooks = sorted((ROOT / "solutions").glob("*.ipynb"))
     if args.only:
@@ -444,8 +442,7 @@ def main(argv=None) -> int:
         os.environ["JUPYTER_PATH"] = os.pathsep.join([str(jupyter)] + [
             x for x in os.environ.get("JUPYTER_PATH", "").split(os.pathsep) if x])
 
-        sys.path.insert(0, str(ROOT / "scripts"))
-        from chapter import execute
+        from chapter import execute      # scripts/chapter.py, beside this script
 
         pinned_before = {n: before[n] for n in stack.pins}
         baseline = set(before) - {PACKAGE}

@@ -24,18 +24,13 @@ import tempfile
 from pathlib import Path
 
 import nbformat
-import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
-from autograde.course import nbgrader  # noqa: E402  (one way to run nbgrader, shared with the grader)
+from autograde.course import COURSE, binder_url, colab_url, install_url, nbgrader  # noqa: E402
+# (one way to run nbgrader, shared with the grader; the course's public addresses, one place)
 SOLUTIONS, RELEASE = ROOT / "solutions", ROOT / "notebooks"
-COURSE = yaml.safe_load((ROOT / "course.yaml").read_text())
 MARKERS = ("### BEGIN SOLUTION", "### END SOLUTION", "### BEGIN HIDDEN TESTS", "### END HIDDEN TESTS",
            "BEGIN MARK SCHEME", "END MARK SCHEME")
-
-
-def install_url() -> str:
-    return f"git+https://github.com/{COURSE['repository']}@{COURSE['ref']}"
 
 
 # The Colab install cell of every notebook ($install_url: install_url()). In Colab it installs the
@@ -80,15 +75,6 @@ def install_cell_index(cells) -> int | None:
     """Index of a notebook's Colab install cell: its first code cell that mentions google.colab."""
     return next((i for i, c in enumerate(cells)
                  if c["cell_type"] == "code" and "google.colab" in "".join(c["source"])), None)
-
-
-def colab_url(name: str) -> str:
-    return (f"https://colab.research.google.com/github/{COURSE['repository']}/blob/{COURSE['ref']}/"
-            f"notebooks/{name}")
-
-
-def binder_url(name: str) -> str:
-    return f"https://mybinder.org/v2/gh/{COURSE['repository']}/{COURSE['ref']}?labpath=notebooks%2F{name}"
 
 
 def badge_cell(name: str):

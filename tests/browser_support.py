@@ -12,7 +12,7 @@ fails instead::
         with chromium() as b:
             yield b
 
-(tests/test_feedback_browser.py has the same rules in its own fixture; it can use this module.)
+(tests/test_feedback_browser.py, test_site_browser.py and test_learner_path.py launch it this way.)
 """
 
 from __future__ import annotations

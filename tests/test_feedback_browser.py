@@ -42,8 +42,8 @@ ROOT = Path(__file__).resolve().parents[1]
 
 from autograde import feedback_html
 from autograde.feedback_html import ALT_TEXT, CSP, CSP_META, NOTE_JAVASCRIPT, FeedbackHTMLExporter
+from browser_support import chromium
 
-CHROMIUM = "/usr/bin/chromium"     # Debian's package; Playwright never fetches a browser of its own here
 TRACE = "pwned"                    # what a payload that ran leaves; never written whole in a payload's code
 PNG = "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg=="
 HONEST = ("Honest heading", "honest_answer = 6 * 7", "forty-two printed", r"\alpha^2", "cell in a table")
@@ -310,27 +310,8 @@ def test_an_honest_svg_and_a_link_are_kept():
 # --- in a browser ----------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def browser():
-    why = None
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        why = "the Python package playwright is not installed (make browser)"
-    else:
-        if not os.access(CHROMIUM, os.X_OK):
-            why = f"{CHROMIUM} is not installed (make browser, or: apt-get install chromium)"
-    if why:
-        if os.environ.get("REQUIRE_BROWSER"):
-            pytest.fail(f"REQUIRE_BROWSER is set, but {why}")
-        pytest.skip(why)
-    with sync_playwright() as p:
-        try:
-            chromium = p.chromium.launch(executable_path=CHROMIUM)    # never a browser Playwright downloads
-        except Exception as e:  # noqa: BLE001
-            if os.environ.get("REQUIRE_BROWSER"):
-                raise
-            pytest.skip(f"{CHROMIUM} does not start under Playwright: {e}")
-        yield chromium
-        chromium.close()
+    with chromium() as b:          # tests/browser_support.py: Debian's Chromium, skip or fail as it says
+        yield b
 
 
 DOM_CHECK = """() => {
