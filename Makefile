@@ -4,6 +4,8 @@
 #   make run      the pipeline alone, seed 0, default config -> runs/seed0/metrics.json
 #   make release  regenerate the student notebooks/ from solutions/ (nbgrader)
 #   make grade    grade a class: make grade SUBMISSIONS=lms_download.zip [SCHEDULER=tcp://host:8786] [REGRADE=1]
+#                 -> autograde/grades.csv, report.csv, canvas_import.csv, moodle_import.csv, class_report.html
+#   make gradescope  the Gradescope autograder zip -> runs/gradescope/autograder.zip [OUT=path.zip]
 #   make icu      PyICU, which grading needs to find look-alike student ids (make test and make grade run it)
 #   make browser  Chromium and Playwright, for the feedback pages' browser test (make test runs it)
 #   make lab      JupyterLab on the student notebooks (instructors: jupyter lab solutions/)
@@ -23,7 +25,7 @@ STAMP  := $(VENV)/.installed
 export PATH := $(abspath $(VENV))/bin:$(PATH)
 
 .PHONY: setup sandbox icu browser chapter run test bench meta claims pair times release grade lab clean \
-        site site-deps site-smoke lanes colab-check
+        site site-deps site-smoke lanes colab-check gradescope
 
 setup: $(STAMP)
 
@@ -146,6 +148,12 @@ release: setup
 grade: setup sandbox icu
 	@test -n "$(SUBMISSIONS)" || (echo "usage: make grade SUBMISSIONS=path/to/submissions.zip" && exit 2)
 	$(PY) -m autograde.grade "$(SUBMISSIONS)" $(if $(SCHEDULER),--scheduler $(SCHEDULER)) $(if $(REGRADE),--regrade)
+
+# The Gradescope autograder (autograde/gradescope.py): setup.sh and run_autograder at the zip's root,
+# this package vendored at the commit built. Upload it on the assignment's Configure Autograder page
+# (README, "Grading on Gradescope"). OUT defaults to runs/gradescope/autograder.zip.
+gradescope: setup
+	$(PY) -m autograde.gradescope build "$(if $(OUT),$(OUT),runs/gradescope/autograder.zip)"
 
 lab: setup
 	$(VENV)/bin/jupyter lab notebooks/

@@ -35,15 +35,18 @@ import argparse
 import json
 import shutil
 import sys
+import time
 import warnings
 from pathlib import Path
 
 import nbformat
 
 from . import intake, sandbox
+from .class_report import write_class_report
 from .course import ASSIGNMENT, COURSE_ID, HERE, NOTEBOOKS, _one_run_per_course, course_bundle, prepare_course
 from .feedback import generate_feedback, sanitize_feedback_sources
 from .gradebook import export, record
+from .lms_export import write_lms_exports
 from .prepare import prepare_student
 from .schedule import _split, default_jobs, run_tasks
 from .stages import SHARE_FROM, grader_fingerprint, shared_stages, submission_fingerprint
@@ -95,7 +98,8 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
         log(f"WARNING: {line}")
         warnings.warn(line)
     release = {name: nbformat.read(course / "release" / ASSIGNMENT / name, as_version=4) for name in NOTEBOOKS}
-    report = {s: {"notes": list(got.notes.get(s, [])), "completion": {}, "verdicts": {}, "failed": {}}
+    report = {s: {"notes": list(got.notes.get(s, [])), "completion": {}, "verdicts": {}, "failed": {},
+                  "lms": got.lms.get(s)}          # the LMS's own identity, for its import file
               for s in got.students}
     prepared = {}
     for s, uploads in got.students.items():
@@ -167,11 +171,27 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
             except Exception:
                 pass
         gb.db.commit()
+    phases = {}
+    t = time.perf_counter()
     record(course, report, results)
     sanitize_feedback_sources(course, report)
+    phases["gradebook"], t = time.perf_counter() - t, time.perf_counter()
     for student, error in generate_feedback(course, [s for s in report if results.get(s)], jobs, log).items():
         report[student]["notes"].append(f"no feedback pages: {error}")
+    phases["feedback pages"], t = time.perf_counter() - t, time.perf_counter()
+    for s in report:                   # nbgrader's autograde of this student's notebooks, kernels included
+        times = [r["seconds"] for r in results.get(s, {}).values() if isinstance(r, dict) and "seconds" in r]
+        report[s]["seconds"] = round(sum(times), 2) if times else None
     export(course, report, got.rejected)
+    phases["grades.csv, report.csv"], t = time.perf_counter() - t, time.perf_counter()
+    write_lms_exports(course, report, log=log)
+    phases["LMS import files"], t = time.perf_counter() - t, time.perf_counter()
+    try:
+        write_class_report(course, report, submitted=prepared)
+    except Exception as e:  # noqa: BLE001 - the report must never cost the grades
+        log(f"WARNING: no class report ({type(e).__name__}: {e})")
+    phases["class report"] = time.perf_counter() - t
+    log("after grading: " + ", ".join(f"{name} {sec:.1f} s" for name, sec in phases.items()))
     return report
 
 
@@ -193,9 +213,12 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     if not args.submissions.exists():
         p.error(f"{args.submissions} does not exist")
-    report = grade_class(args.submissions, args.course, args.timeout, args.jobs,
-                         confine=False if args.no_confine else None, scheduler=args.scheduler,
-                         share={"auto": None, "yes": True, "no": False}[args.share], regrade=args.regrade)
+    try:
+        report = grade_class(args.submissions, args.course, args.timeout, args.jobs,
+                             confine=False if args.no_confine else None, scheduler=args.scheduler,
+                             share={"auto": None, "yes": True, "no": False}[args.share], regrade=args.regrade)
+    except intake.LayoutError as e:      # e.g. a download that mixes two LMSs' layouts
+        p.error(str(e))
     print(f"graded {len(report)} students: scores in {args.course / 'grades.csv'}, per-file notes in "
           f"{args.course / 'report.csv'}, feedback in {args.course / 'feedback'}/")
     return 0

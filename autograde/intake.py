@@ -18,6 +18,28 @@ Layouts accepted (after one optional wrapper folder that holds the whole class, 
 * folder: ``<student>/<notebook>.ipynb``       e.g. ``s042/02_reward.ipynb``
           ``<student>/<student>_<notebook>.ipynb`` (the same student twice) is fine too.
 
+LMS layouts (``autograde/lms_layouts.py`` quotes where each LMS documents its naming, and says
+what is inferred): a download that Canvas ("Download Submissions"), Moodle ("Download all
+submissions", in folders or not) or Blackboard Learn Original ("Assignment File Download") made
+is read in that LMS's own naming, and only in it:
+
+* Canvas:     ``leeann_1001_40002_02_reward.ipynb``, ``müllerzoë_LATE_1002_40004_02_reward-1.ipynb``
+* Moodle:     ``Zoë Müller_5301277_assignsubmission_file/02_reward.ipynb`` (or ``..._file_02_reward.ipynb``)
+* Blackboard: ``Chapter 3_jdoe_attempt_2026-03-02-09-30-15_02_reward.ipynb``, and its receipt
+              ``Chapter 3_jdoe_attempt_2026-03-02-09-30-15.txt``
+
+There the LMS's id of the student decides whose a file is (Canvas user id, Moodle participant
+id, Blackboard username; never the free-text name), the folder-safe id is ``<lms>_<that id>``
+(``canvas_1001``, ``moodle_5301277``, ``blackboard_jdoe``: the same in every download, whatever
+the student's name becomes), and ``Intake.lms`` keeps the LMS's identifiers, Canvas's late
+marker and Blackboard's attempt times for matching grades back. Of several uploads of one
+notebook, the LMS's own order decides (Canvas's file ids, Blackboard's attempt times); the
+student's notes say which was graded and which were set aside, that Canvas marked them late, and
+which Blackboard attempt was graded (its receipt's date when it has one). A file that does not
+follow the LMS's naming names no student of it and is graded for nobody; a download that mixes
+two LMSs' layouts is refused (ValueError). A download is taken for an LMS's when more than half
+its files follow that LMS's naming; otherwise the generic layouts below apply.
+
 The notebook part must be one of the assignment's notebooks (its two-digit number AND its name,
 in any letter case), at the END of the name, so a student id may itself contain underscores.
 It may carry a re-upload suffix, which also counts as "how many times re-uploaded" when two uploads
@@ -57,6 +79,9 @@ from pathlib import Path
 from typing import Callable
 
 import nbformat
+
+from . import lms_layouts
+from .lms_layouts import LayoutError  # noqa: F401  (the download cannot be read: grade.main says why)
 
 MB = 2 ** 20
 MAX_NOTEBOOK_BYTES = 50 * MB     # a chapter notebook with outputs is < 5 MB; 50 MB is surely wrong
@@ -105,10 +130,29 @@ class Intake:
         and which ignored, what was refused and why).
     ``rejected``: one line per file that was graded for nobody: which member and why.
     ``display_names``: student id -> the id exactly as the LMS wrote it (Unicode NFC), for the
-        report and for matching grades back to the LMS.
+        report and for matching grades back to the LMS; in an LMS layout ``<lms>_<LMS id>``
+        (the LMS's own identity is in ``lms``).
     ``lookalikes_checked``: whether look-alike ids were looked for (False when PyICU is missing).
     ``warnings``: lines for the instructor about the whole class download (e.g. that look-alike
         ids were not checked, and how to enable the check); print them where grading is logged.
+    ``lms``: for a download in Canvas's, Moodle's or Blackboard's own layout, student id -> the
+        LMS's identity of that student, to match grades back (students of the generic layouts
+        have no entry)::
+
+            {"system": "canvas" | "moodle" | "blackboard",
+             "name": the student's name as the LMS wrote it (Canvas: the sortable name as its
+                     file names write it, "leeann"; None for an anonymous Canvas assignment;
+                     Blackboard: the receipt's name, else the username),
+             "ids": {"user_id": "12345", "attachment_id": "678"}   (Canvas; user_id is
+                        "anon_<id>" when anonymous; attachment_id is the number Canvas writes
+                        after the user id: the file (attachment) id of the newest file graded;
+                        Canvas writes no submission id into its file names)
+                    | {"participant_id": "1234567"}                (Moodle)
+                    | {"username": "jdoe"},                         (Blackboard)
+             "late": True | False (Canvas's LATE marker) | None (Moodle, Blackboard: not in the names),
+             "submitted_at": ISO 8601 local time without zone (Blackboard) | None,
+             "attempt": the graded attempt's number among this student's attempts in the
+                        download, oldest first (Blackboard) | None}
     """
     students: dict[str, dict[str, Upload]] = field(default_factory=dict)
     notes: dict[str, list[str]] = field(default_factory=dict)
@@ -116,6 +160,7 @@ class Intake:
     display_names: dict[str, str] = field(default_factory=dict)
     lookalikes_checked: bool = False
     warnings: list[str] = field(default_factory=list)
+    lms: dict[str, dict] = field(default_factory=dict)
 
 
 class _Refused(Exception):
@@ -363,10 +408,19 @@ def _folder_entries(root: Path, rejected: list[str], max_members: int):
 @dataclass
 class _Candidate:
     entry: _Entry
-    original: str        # the student id as written (NFC, stripped)
+    original: str        # the student id as written (NFC, stripped); "<system>_<LMS id>" in an LMS layout
     notebook: str
     counter: int
     order: int
+    lms: lms_layouts.LmsFile | None = None     # in an LMS layout: what the LMS's name says
+
+    def newness(self) -> tuple:
+        """Larger is newer: the LMS's own order first (Canvas's file id, Blackboard's attempt
+        time), then the file's time, the re-upload counter, the place in the archive."""
+        return (self.lms.rank if self.lms else (), self.entry.mtime, self.counter, self.order)
+
+    def short(self) -> str:
+        return self.lms.label if self.lms else _short(self.entry)
 
 
 def collect(submissions: Path, notebooks: list[str], *,
@@ -394,7 +448,9 @@ def collect(submissions: Path, notebooks: list[str], *,
     * several uploads of one notebook by one student: the newest is graded (modification time;
       on a tie the larger re-upload counter, ``(2)`` over ``(1)`` over none; then the later entry
       in the archive); the note names the one graded and those ignored. If the newest cannot be
-      read at all (too big, corrupt), the next newest is graded and the note says so.
+      read at all (too big, corrupt), the next newest is graded and the note says so;
+    * a download in Canvas's, Moodle's or Blackboard's own layout is read by that LMS's ids
+      (module docstring; ``Intake.lms``); one that mixes two of them raises ValueError.
     """
     submissions = Path(submissions)
     names = _Names(notebooks)
@@ -406,7 +462,7 @@ def collect(submissions: Path, notebooks: list[str], *,
     try:
         zf = zipfile.ZipFile(submissions)
     except (zipfile.BadZipFile, OSError) as e:
-        raise ValueError(f"{submissions} is neither a folder nor a readable .zip file ({e})") from None
+        raise LayoutError(f"{submissions} is neither a folder nor a readable .zip file ({e})") from None
     with zf:
         entries = list(_zip_entries(zf, rejected, max_members))
         return _collect(entries, names, intake, max_member_bytes, max_total_bytes)
@@ -430,6 +486,13 @@ def _collect(entries: list[_Entry], names: _Names, intake: Intake,
             rejected.append(f"{e.member!r}: ignored: a system or hidden file, not a submission")
             continue
         usable.append(e)
+
+    # 1b. a download in an LMS's own layout (Canvas, Moodle, Blackboard): that LMS's ids decide
+    system, wrapped, why = lms_layouts.detect([e.parts for e in usable], names.parse)   # ValueError: two LMSs mixed
+    if why:
+        intake.warnings.append(why)
+    if system:
+        return _collect_lms(usable, system, wrapped, names, intake, max_member_bytes, max_total_bytes)
 
     # 2. a wrapper folder around the whole class?
     tops = {e.parts[0] for e in usable if len(e.parts) > 1}
@@ -520,14 +583,23 @@ def _collect(entries: list[_Entry], names: _Names, intake: Intake,
 
     # 4. one folder-safe id per student as written; collisions are told, never merged
     ids = _assign_ids(known, intake)
-
     # 5. the newest readable upload of each notebook
+    _pick_newest(candidates, ids, intake, max_member_bytes, max_total_bytes)
+    return _finish(intake, ids, pending_notes)
+
+
+def _pick_newest(candidates: list[_Candidate], ids: dict[str, str], intake: Intake,
+                 max_member_bytes: int, max_total_bytes: int, total: int = 0) -> dict[tuple[str, str], _Candidate]:
+    """Grade the newest readable upload of each student's notebook (``_Candidate.newness``);
+    the note names the one graded and those ignored. ``total``: bytes already read from the
+    download. Returns {(student id, notebook): graded}."""
+    rejected = intake.rejected
     groups: dict[tuple[str, str], list[_Candidate]] = {}
     for c in candidates:
         groups.setdefault((ids[c.original], c.notebook), []).append(c)
-    total = 0
+    chosen = {}
     for (sid, notebook), group in sorted(groups.items()):
-        group.sort(key=lambda c: (c.entry.mtime, c.counter, c.order), reverse=True)
+        group.sort(key=_Candidate.newness, reverse=True)
         graded, failed = None, []
         for c in group:
             if total + c.entry.size > max_total_bytes:
@@ -541,22 +613,32 @@ def _collect(entries: list[_Entry], names: _Names, intake: Intake,
                 except _Refused as e:
                     why = str(e)
             rejected.append(f"{c.entry.member!r}: refused: {why}")
-            failed.append(f"{_short(c.entry)} could not be read ({why})")
+            failed.append(f"{c.short()} could not be read ({why})")
         notes = intake.notes.setdefault(sid, [])
         if graded is None:
             notes.append(f"{notebook}: not graded: " + "; ".join(failed))
             continue
         c, data = graded
+        chosen[(sid, notebook)] = c
         intake.students.setdefault(sid, {})[notebook] = Upload(data, c.entry.member, c.entry.mtime)
         ignored = group[group.index(c) + 1:]     # older than the graded one
         if len(group) > 1:
-            line = f"{notebook}: {len(group)} uploads; graded {_short(c.entry)}, the newest"
+            newest = "the newest" if c.lms is None else _NEWEST[c.lms.system]
+            line = f"{notebook}: {len(group)} uploads; graded {c.short()}, {newest}"
             if failed:
                 line += " that could be read; " + "; ".join(failed)
             if ignored:
-                line += "; ignored the older " + ", ".join(_short(x.entry) for x in ignored)
+                line += "; ignored the older " + ", ".join(x.short() for x in ignored)
             notes.append(line)
+    return chosen
 
+
+_NEWEST = {"canvas": "the newest (Canvas numbers the files it keeps in the order they were uploaded)",
+           "moodle": "the newest", "blackboard": "from the latest attempt that holds it"}
+
+
+def _finish(intake: Intake, ids: dict[str, str], pending_notes: list[tuple[str, str]]) -> Intake:
+    """Every student the download names gets a row (and their notes), in order."""
     for who, note in pending_notes:
         sid = ids.get(unicodedata.normalize("NFC", who).strip())
         if sid:
@@ -566,7 +648,98 @@ def _collect(entries: list[_Entry], names: _Names, intake: Intake,
         intake.notes.setdefault(sid, [])
     intake.students = dict(sorted(intake.students.items()))
     intake.notes = dict(sorted(intake.notes.items()))
+    intake.lms = dict(sorted(intake.lms.items()))
     return intake
+
+
+def _collect_lms(usable: list[_Entry], system: str, wrapped: bool, names: _Names, intake: Intake,
+                 max_member_bytes: int, max_total_bytes: int) -> Intake:
+    """A download in ``system``'s own layout (``lms_layouts``): the LMS's id of each student decides
+    whose a file is; their folder-safe id is ``<system>_<LMS id>`` (``canvas_12345``,
+    ``moodle_1234567``, ``blackboard_jdoe``), the same in every download of the assignment, since
+    names can change in the LMS and ids cannot; their LMS identity goes to ``Intake.lms``."""
+    rejected = intake.rejected
+    title = lms_layouts.TITLE[system]
+    pending_notes: list[tuple[str, str]] = []
+    files_of: dict[str, list[lms_layouts.LmsFile]] = {}    # "<system>_<LMS id>" -> their files
+    candidates: list[_Candidate] = []
+
+    read_so_far = 0                                 # receipts count towards the class's byte limit
+
+    def read_text(i: int) -> bytes:
+        nonlocal read_so_far
+        size = usable[i].size
+        if size > lms_layouts.RECEIPT_BYTES:
+            raise ValueError(f"it is {_size(size)}, more than a receipt can be")
+        if read_so_far + size > max_total_bytes:
+            raise ValueError(f"the class download passed the {_size(max_total_bytes)} limit for all files together")
+        try:
+            data = usable[i].read(min(lms_layouts.RECEIPT_BYTES, max_total_bytes - read_so_far))
+        except _Refused as why:
+            raise ValueError(str(why)) from None
+        read_so_far += len(data)
+        return data
+
+    members = [e.parts[1:] if wrapped else e.parts for e in usable]
+    found, warnings = lms_layouts.read(system, members, names.parse, read_text)
+    intake.warnings += warnings
+    for order, (e, f) in enumerate(zip(usable, found)):
+        if isinstance(f, str):
+            rejected.append(f"{e.member!r}: refused: {f}")
+            continue
+        who = f"{system}_{f.lms_id}"
+        try:
+            normalise_student_id(who)
+        except ValueError as why:
+            rejected.append(f"{e.member!r}: refused: {why}")
+            continue
+        files_of.setdefault(who, []).append(f)
+        if f.made_by_lms == "receipt":             # read: its name and date are in the student's record
+            if f.receipt.get("error"):
+                rejected.append(f"{e.member!r}: refused: a {title} receipt that could not be read "
+                                f"({f.receipt['error']})")
+            continue
+        if f.original is None:
+            rejected.append(f"{e.member!r}: refused: {title} made it for a {f.made_by_lms}, not a notebook")
+            pending_notes.append((who, f"a {f.made_by_lms} ({f.label}): not a .ipynb notebook, not graded. "
+                                       f"{REDOWNLOAD}"))
+            continue
+        base = f.original
+        if f.claims:
+            rejected.append(f"{e.member!r}: refused: it is {title} user {f.lms_id}'s upload, but its own name "
+                            f"{base!r} is how {title} names a file of {title} user {f.claims}; graded for nobody")
+            pending_notes.append((who, f"{base}: its name says it belongs to {title} user {f.claims}, not to you, "
+                                       f"so it was not graded for anyone; rename it to the notebook's name "
+                                       f"and upload it again"))
+            continue
+        if not base.casefold().endswith(".ipynb"):
+            rejected.append(f"{e.member!r}: refused: not a .ipynb notebook file")
+            pending_notes.append((who, f"{base}: not a .ipynb notebook, not graded. {REDOWNLOAD}"))
+            continue
+        parsed = names.parse(base)
+        if parsed is None:
+            rejected.append(f"{e.member!r}: refused: names no notebook of this assignment "
+                            f"(expected one of {names.expected})")
+            pending_notes.append((who, f"{base}: names no notebook of this assignment, not graded; "
+                                       f"the notebooks are {names.expected}"))
+            continue
+        _prefix, notebook, counter = parsed      # the student's own prefix: their naming, not who they are
+        if e.size > max_member_bytes:
+            rejected.append(f"{e.member!r}: refused: it is {_size(e.size)}, more than the "
+                            f"{_size(max_member_bytes)} limit for one file")
+            pending_notes.append((who, f"{base}: {_size(e.size)}, too big to be this notebook; "
+                                       f"not graded. Clear the outputs, save, and upload it again"))
+            continue
+        candidates.append(_Candidate(e, who, notebook, counter, order, lms=f))
+
+    ids = _assign_ids(set(files_of), intake)
+    chosen = _pick_newest(candidates, ids, intake, max_member_bytes, max_total_bytes, total=read_so_far)
+    for who, sid in ids.items():
+        graded = [c.lms for (s, _), c in chosen.items() if s == sid]
+        record, notes = lms_layouts.summarise(system, files_of[who], graded)
+        intake.lms[sid] = record
+        intake.notes.setdefault(sid, [])[:0] = notes
+    return _finish(intake, ids, pending_notes)
 
 
 def _same_student(a: str, b: str) -> bool:

@@ -24,7 +24,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from browser_support import chromium
+from browser_support import chromium, skip_or_fail
 
 ROOT = Path(__file__).resolve().parents[1]
 pytestmark = pytest.mark.lane
@@ -38,6 +38,8 @@ def site(tmp_path_factory) -> Path:
         html = Path(given).resolve()
         assert (html / "index.html").exists(), f"SITE_HTML={given} holds no built site (make site-smoke)"
         return html
+    if not Path(sys.executable).with_name("jupyter-book").exists():
+        skip_or_fail("Jupyter Book is not installed (make site-deps), and SITE_HTML names no built site")
     tmp = tmp_path_factory.mktemp("site")
     subprocess.run([sys.executable, "scripts/chapter.py", "--smoke", "--out", str(tmp / "run")], cwd=ROOT, check=True,
                    capture_output=True)

@@ -1,0 +1,321 @@
+"""The Gradescope autograder bundle (autograde/gradescope.py): its zip as Gradescope's specification
+lays it out, and its run_autograder grading one hand-in in an emulated /autograder.
+
+The emulation is what Gradescope's image holds after setup.sh, less the installs: the zip
+extracted into source/, run_autograder copied to the root, and in source/course/.venv the venv
+these tests run in, cloned with hard links (a second or so), with this package installed from the
+bundle's own copy (a path entry, as ``pip install -e`` makes one) instead of from the working tree.
+So the code that grades is the bundle's, in confined kernels where bubblewrap works here.
+"""
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+import zipfile
+from pathlib import Path
+
+import nbformat
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+
+from autograde import gradescope, sandbox
+from autograde.course import NOTEBOOKS
+
+VISIBILITY = ["hidden", "after_due_date", "after_published", "visible"]
+FORMATS = ["text", "html", "simple_format", "md", "ansi"]
+# results.json as https://gradescope-autograders.readthedocs.io/en/latest/specs/ documents it; no other key
+SCHEMA = {
+    "type": "object", "additionalProperties": False,
+    "properties": {
+        "score": {"type": "number"}, "execution_time": {"type": "number"}, "output": {"type": "string"},
+        "output_format": {"enum": FORMATS}, "test_output_format": {"enum": FORMATS},
+        "test_name_format": {"enum": FORMATS}, "visibility": {"enum": VISIBILITY},
+        "stdout_visibility": {"enum": VISIBILITY}, "extra_data": {"type": "object"},
+        "tests": {"type": "array", "items": {
+            "type": "object", "additionalProperties": False,
+            "properties": {
+                "score": {"type": "number"}, "max_score": {"type": "number"}, "status": {"enum": ["passed", "failed"]},
+                "name": {"type": "string"}, "name_format": {"enum": FORMATS}, "number": {"type": "string"},
+                "output": {"type": "string"}, "output_format": {"enum": FORMATS},
+                "tags": {"type": "array", "items": {"type": "string"}}, "visibility": {"enum": VISIBILITY},
+                "extra_data": {"type": "object"}}}},
+        "leaderboard": {"type": "array"}},
+    "anyOf": [{"required": ["score"]}, {"properties": {"tests": {"items": {"required": ["score"]}}}}],
+}
+AUTOMATIC = 19 + 3          # five hidden-test cells (4+4+4+3+4) and three completion points
+
+
+# --- the bundle ------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def bundle(tmp_path_factory):
+    out = tmp_path_factory.mktemp("bundle") / "autograder.zip"
+    assert gradescope.main(["build", str(out)]) == 0
+    return out
+
+
+def test_the_zip_is_laid_out_as_gradescope_asks(bundle):
+    with zipfile.ZipFile(bundle) as zf:
+        infos = {i.filename: i for i in zf.infolist()}
+        for script in ("setup.sh", "run_autograder"):          # at the root, executable, bash
+            assert script in infos
+            assert (infos[script].external_attr >> 16) & 0o111 == 0o111, script
+            text = zf.read(script).decode()
+            assert text.startswith("#!/usr/bin/env bash\n")
+            subprocess.run(["bash", "-n"], input=text, text=True, check=True)
+        config = json.loads(zf.read(gradescope.CONFIG))
+        course = {n[len("course/"):]: zf.read(n) for n in infos if n.startswith("course/")}
+        setup = zf.read("setup.sh").decode()
+        requirements = zf.read(gradescope.REQUIREMENTS).decode()
+    # the package at the commit built: the working tree's own bytes, and what grading reads beside them
+    head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
+    assert config["commit"] == head and config["timeout"] == 120 and config["visibility"] == "visible"
+    for rel, data in course.items():
+        assert (ROOT / rel).read_bytes() == data, rel
+    need = {"pyproject.toml", "course.yaml", "requirements.txt", "autograde/gradescope.py", "autograde/nbgrader_config.py",
+            "autograde/mark_scheme.yaml", "pusht/__init__.py", "pusht/grading.py", "pusht/nb/times.json"}
+    need |= {f"solutions/{n}" for n in NOTEBOOKS}
+    assert need <= set(course), need - set(course)
+    assert not [n for n in course if "__pycache__" in n or n.endswith((".pyc", ".db")) or n.startswith("autograde/source/")]
+    # torch's CPU build at requirements.txt's pin, the rest of what grading needs with requirements.txt's pins
+    assert "--index-url https://download.pytorch.org/whl/cpu \"torch==2.13.0\"" in setup
+    assert "torch==2.13.0" in (ROOT / "requirements.txt").read_text()
+    pins = dict(line.split("==") for line in requirements.splitlines() if line and not line.startswith("#"))
+    assert set(pins) == set(gradescope.GRADING_PACKAGES) and pins["nbgrader"] == "0.9.6" and pins["nh3"] == "0.3.8"
+    assert "apt-get install" in setup and "bubblewrap" in setup and "pip install -q --no-deps -e \"$COURSE\"" in setup
+
+
+def test_the_same_tree_builds_the_same_zip(bundle, tmp_path):
+    again = tmp_path / "again.zip"
+    gradescope.build(again)
+    assert again.read_bytes() == bundle.read_bytes()
+
+
+def test_make_gradescope_builds_the_bundle():
+    dry = subprocess.run(["make", "-n", "gradescope", "OUT=x.zip"], cwd=ROOT, capture_output=True, text=True)
+    assert dry.returncode == 0, dry.stderr
+    assert '-m autograde.gradescope build "x.zip"' in dry.stdout
+
+
+# --- an emulated /autograder -----------------------------------------------------------------------
+class Container:
+    """/autograder as Gradescope lays it out once setup.sh has run (see the module's docstring)."""
+
+    def __init__(self, root: Path, bundle: Path):
+        self.root = root
+        root.mkdir()
+        os.chmod(root, 0o755)
+        with zipfile.ZipFile(bundle) as zf:
+            zf.extractall(root / "source")
+        for script in ("setup.sh", "run_autograder"):
+            os.chmod(root / "source" / script, 0o755)
+        shutil.copy(root / "source" / "run_autograder", root / "run_autograder")
+        venv = root / "source" / "course" / ".venv"
+        made = subprocess.run(["cp", "-al", sys.prefix, str(venv)], capture_output=True, text=True)
+        if made.returncode:
+            pytest.skip(f"the venv cannot be cloned with hard links here: {made.stderr.strip()}")
+        site = next(venv.glob("lib/python3*/site-packages"))
+        for p in site.iterdir():          # the working tree's install of this package out, the bundle's in
+            if p.name.startswith("__editable__") and "pusht_dreamer" in p.name or p.name in ("pusht", "autograde"):
+                shutil.rmtree(p) if p.is_dir() else p.unlink()
+        (site / "pusht-course.pth").write_text(str(root / "source" / "course") + "\n")
+        course = root / "source" / "course"           # as setup.sh: bytecode before any kernel reads it
+        subprocess.run([str(venv / "bin" / "python"), "-m", "compileall", "-q", str(course / "pusht"),
+                        str(course / "autograde")], check=True)
+
+    def grade(self, files: dict) -> tuple[dict, str, float]:
+        """Submit ``files`` ({path in the submission: bytes}); (results.json, stdout, seconds)."""
+        for sub in ("submission", "results"):
+            shutil.rmtree(self.root / sub, ignore_errors=True)
+            (self.root / sub).mkdir()
+        for rel, data in files.items():
+            (self.root / "submission" / rel).parent.mkdir(parents=True, exist_ok=True)
+            (self.root / "submission" / rel).write_bytes(data)
+        env = {k: v for k, v in os.environ.items() if not k.startswith(("VIRTUAL_ENV", "PYTHON"))}
+        t = time.perf_counter()
+        proc = subprocess.run([str(self.root / "run_autograder")], cwd="/", capture_output=True, text=True,
+                              env={**env, gradescope.ROOT_ENV: str(self.root)}, timeout=900)
+        seconds = time.perf_counter() - t
+        assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+        return json.loads((self.root / "results" / "results.json").read_text()), proc.stdout, seconds
+
+
+@pytest.fixture(scope="module")
+def container(bundle, tmp_path_factory):
+    c = Container(tmp_path_factory.mktemp("gradescope") / "autograder", bundle)
+    yield c
+    subprocess.run(["rm", "-rf", str(c.root / "source" / "course" / ".venv")])      # 55,000 links: rm is quicker
+
+
+@pytest.fixture(scope="module")
+def full_marks(container, executed_solutions):
+    """The instructor's solutions, executed in smoke mode (the conftest's session fixture), handed in."""
+    out = container.grade({n: (executed_solutions / n).read_bytes() for n in NOTEBOOKS})
+    print(f"full-marks hand-in graded in {out[2]:.0f} s")
+    return out
+
+
+@pytest.fixture(scope="module")
+def release_hand_in(container):
+    """The student release handed in unchanged (every exercise raises NotImplementedError), under the
+    names learners' downloads get, without 05 and 06, with a link and a file that is no notebook."""
+    nb = lambda n: (ROOT / "notebooks" / n).read_bytes()     # noqa: E731
+    files = {"Copy of 02_reward.ipynb": nb("02_reward.ipynb"),
+             "notebooks/s042_03_imagination_actor.ipynb": nb("03_imagination_actor.ipynb"),
+             "04_imagination_gap (1).ipynb": nb("04_imagination_gap.ipynb"),
+             "01_world_model.ipynb": nb("01_world_model.ipynb"), "notes.txt": b"my notes"}
+    out = container.grade(files)
+    print(f"release hand-in graded in {out[2]:.0f} s")
+    return out
+
+
+def _check_schema(results):
+    import jsonschema
+
+    jsonschema.validate(results, SCHEMA)
+    assert results["score"] == sum(t["score"] for t in results["tests"])
+    assert all(0 <= t["score"] <= t["max_score"] for t in results["tests"])
+    assert results["stdout_visibility"] == "hidden" and results["output_format"] == "text"
+
+
+def _cells():
+    return [(c["notebook"][:-len(".ipynb")], c["grade_id"], c["points"]) for c in gradescope.graded_cells()]
+
+
+def test_the_instructors_solutions_score_full_marks(full_marks):
+    results, stdout, _ = full_marks
+    _check_schema(results)
+    assert results["score"] == AUTOMATIC, results["output"]
+    tests = results["tests"]
+    assert [t["name"].split(" ")[0] + " " + t["name"].split(" ")[1] for t in tests] == \
+        [f"{nb}: {g}" for nb, g, _ in _cells()]                  # one per graded cell, in notebook order
+    for t, (_, g, points) in zip(tests, _cells()):
+        if g.endswith("_sentence"):          # graded by hand on Gradescope: a 0-point note
+            assert (t["score"], t["max_score"]) == (0, 0) and "by hand" in t["output"]
+            assert t["visibility"] == "visible"
+        else:
+            assert t["score"] == t["max_score"] == points, t
+            assert t["visibility"] == "visible"
+            assert ("checks passed" if g.endswith("_tests") else ": in order") in t["output"], t
+    if sandbox.available()[0]:
+        assert "confinement: bubblewrap sandboxes" in stdout
+    assert "/source/course/autograde" in stdout        # the bundle's copy graded, not the working tree's
+
+
+def test_the_unchanged_release_scores_zero_on_every_automatic_test(release_hand_in):
+    results, stdout, _ = release_hand_in
+    _check_schema(results)
+    assert results["score"] == 0
+    by_cell = {t["name"].split(" ")[1]: t for t in results["tests"]}
+    for g in ("reward_impl_tests", "lambda_return_impl_tests", "losses_impl_tests", "dream_impl_tests"):
+        assert by_cell[g]["max_score"] > 0 and "first failure" in by_cell[g]["output"]
+        assert "NotImplementedError" in by_cell[g]["output"]
+    assert "no prediction receipt" in by_cell["ex1_order"]["output"]
+    for g in ("ex2_order", "ex3_order", "block_disagreement_impl_tests"):      # 05 and 06 were not handed in
+        assert by_cell[g]["score"] == 0 and "not in this submission" in by_cell[g]["output"]
+    assert "Notebooks graded: 01_world_model.ipynb, 02_reward.ipynb, 03_imagination_actor.ipynb, " \
+           "04_imagination_gap.ipynb." in results["output"]
+    assert "notes.txt" in results["output"]
+
+
+def _secret_lines() -> list[str]:
+    """Every line of a hidden-test or solution region of the instructor's notebooks, and every line
+    of a solution cell without regions (the one-sentence answers), that the student release does
+    not show; the mark scheme's sentences. Found here from the notebooks, not by the module."""
+    release = "\n".join(c.source for n in NOTEBOOKS for c in nbformat.read(ROOT / "notebooks" / n, as_version=4).cells)
+    lines = []
+    for n in NOTEBOOKS:
+        for cell in nbformat.read(ROOT / "solutions" / n, as_version=4).cells:
+            src = cell.source.splitlines()
+            marks = [i for i, l in enumerate(src) if l.strip().startswith(("### BEGIN", "### END"))]
+            if cell.metadata.get("nbgrader", {}).get("solution") and not marks:
+                lines += src
+            for a, b in zip(marks[::2], marks[1::2]):
+                lines += src[a + 1:b]
+    lines = [l.strip() for l in lines if len(l.strip()) >= gradescope.MIN_SECRET_CHARS and l.strip() not in release]
+    scheme = yaml.safe_load((ROOT / "autograde" / "mark_scheme.yaml").read_text())
+    lines += [s.strip() for text in scheme.values() for s in text.split(". ") if len(s.strip()) >= 20]
+    return lines
+
+
+def test_nothing_hidden_reaches_results_or_stdout(full_marks, release_hand_in):
+    secrets = _secret_lines()
+    assert len(secrets) > 40, secrets          # the hidden tests, the five exercises, the sentences, the scheme
+    for results, stdout, _ in (full_marks, release_hand_in):
+        text = json.dumps(results, ensure_ascii=False)
+        shown = json.loads(text)
+        for place, where in (("results.json", "\n".join(_strings(shown))), ("stdout", stdout)):
+            found = [s for s in secrets if s in where]
+            assert not found, (place, found[:5])
+            for marker in ("BEGIN HIDDEN TESTS", "BEGIN SOLUTION", "grading.submit", "Mark scheme"):
+                assert marker not in where, (place, marker)
+
+
+def _strings(obj):
+    if isinstance(obj, str):
+        yield obj
+    elif isinstance(obj, list):
+        for x in obj:
+            yield from _strings(x)
+    elif isinstance(obj, dict):
+        for x in obj.values():
+            yield from _strings(x)
+
+
+# --- the pieces, without grading -------------------------------------------------------------------
+def test_a_hidden_line_in_any_message_is_blanked():
+    secrets = gradescope.secret_lines(ROOT / "solutions")
+    hidden = '__import__("pusht.grading").grading.submit("reward_impl_tests", reward_from_obs)'
+    assert hidden in secrets
+    assert gradescope.redact(f"a preview of the cell: ['{hidden}']", secrets) == "a preview of the cell: ['[hidden]']"
+    # the release's own lines are no secret
+    release = "\n".join(c.source for c in nbformat.read(ROOT / "notebooks" / "02_reward.ipynb", as_version=4).cells)
+    assert not [s for s in secrets if s in release.splitlines()]
+
+
+def test_the_hand_in_is_staged_as_the_intake_names_it(tmp_path):
+    sub = tmp_path / "submission"
+    (sub / "deep" / "er").mkdir(parents=True)
+    (sub / "Copy of 02_reward.ipynb").write_text("{}")
+    (sub / "02_reward.ipynb").write_text("old")
+    os.utime(sub / "02_reward.ipynb", (1, 1))
+    (sub / "deep" / "er" / "ann_lee_05_horizon (2).ipynb").write_text("{}")
+    (sub / "06_closing_the_gap.py").write_text("")
+    (sub / "07_bonus.ipynb").write_text("{}")
+    (sub / "__MACOSX").mkdir()
+    (sub / "__MACOSX" / "._02_reward.ipynb").write_text("")
+    os.symlink("/etc/passwd", sub / "03_imagination_actor.ipynb")
+    staged, notes = gradescope.stage(sub, tmp_path / "dest" / "student")
+    assert staged == ["02_reward.ipynb", "05_horizon.ipynb"]
+    assert (tmp_path / "dest" / "student" / "02_reward.ipynb").read_text() == "{}"      # the newest of two
+    text = " | ".join(notes)
+    assert "graded Copy of 02_reward.ipynb, the newest, not 02_reward.ipynb" in text
+    assert "03_imagination_actor.ipynb: a link, not a file, not graded" in text
+    assert "07_bonus.ipynb: not a notebook of this assignment" in text
+    assert "06_closing_the_gap.py" in text and "._02_reward" not in text
+
+
+def test_required_confinement_grades_nothing_where_no_sandbox_starts(tmp_path, monkeypatch):
+    root = tmp_path / "autograder"
+    (root / "source").mkdir(parents=True)
+    (root / "submission").mkdir()
+    (root / "source" / gradescope.CONFIG).write_text(json.dumps({"confine": "require"}))
+    (root / "submission" / "02_reward.ipynb").write_bytes((ROOT / "notebooks" / "02_reward.ipynb").read_bytes())
+    monkeypatch.setattr(sandbox, "available", lambda: (False, "no namespaces in this container"))
+    lines = []
+    results = gradescope.run(root, log=lines.append)
+    assert results == json.loads((root / "results" / "results.json").read_text())
+    _check_schema(results)
+    assert results["score"] == 0 and not results["tests"] and "could not start its sandbox" in results["output"]
+    assert any("no namespaces in this container" in line for line in lines)
+
+
+def test_jobs_follow_the_environment_then_the_cpu_quota(monkeypatch):
+    monkeypatch.setenv(gradescope.JOBS_ENV, "3")
+    assert gradescope.jobs() == 3
+    monkeypatch.delenv(gradescope.JOBS_ENV)
+    assert 1 <= gradescope.jobs() <= (os.cpu_count() or 1)
