@@ -380,16 +380,20 @@ def gather(course: Path, report: dict, submitted: dict | None = None) -> dict:
 
 _ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")
 _CODE_LINE = re.compile(r"^\s*(-+>|\d+\s|File \"|Cell In\b)|\^\^\^")
+_EXCEPTION = re.compile(r"^([A-Za-z_][\w.]*(?:Error|Exception|Interrupt|Exit|Timeout)):")
 
 
 def _error_line(error) -> str:
     """nbgrader's last error line for a notebook it could not finish (``course._last_error``), as
-    the flag shows it: colour codes dropped; a line of a traceback that quotes a cell (``----> 3
-    x = ...``) is not shown, so no student code reaches the page through it."""
+    the flag shows it: only the exception's type (``ValueError``, ``CellTimeoutError``), never its
+    message or any other line, which can be the student's own words or code."""
     line = _ANSI.sub("", error if isinstance(error, str) else str(error)).strip()
     if _CODE_LINE.search(line):
         return "nbgrader stopped (its last error line quotes code: see report.csv)"
-    return line
+    kind = _EXCEPTION.match(line)
+    if kind is None:       # not "SomeError: ...": it may be any line of the student's traceback
+        return "nbgrader stopped (see report.csv for its last error line)"
+    return f"{kind.group(1)} (the message is in report.csv)"   # the type only: the message can be the student's
 
 
 def _options(exercise: str) -> dict:

@@ -100,7 +100,8 @@ VENDORED = ("pyproject.toml", "README.md", "requirements.txt", "course.yaml", "s
             "autograde", "chapter_site")          # the package as pyproject.toml lists it, and the course
 NOT_VENDORED = re.compile(r"(^|/)(__pycache__|\.ipynb_checkpoints)(/|$)|\.pyc$|^autograde/(source|release|"
                           r"submitted|autograded|feedback|shared_stages)/|^autograde/(gradebook\.db|gradebook\."
-                          r"template\.db|grades\.csv|report\.csv|manual_grades\.csv|graded\.json|\.grading\.lock)$")
+                          r"template\.db|grades\.csv|report\.csv|manual_grades\.csv|graded\.json|\.grading\.lock|"
+                          r"canvas_import\.csv|moodle_import\.csv|lms_export_notes\.txt|class_report\.html)$")
 # what grading imports (autograde/, pusht/, the notebooks' kernels), by their requirements.txt names
 GRADING_PACKAGES = ("torch", "pymunk", "numpy", "matplotlib", "tqdm", "pyyaml", "ipykernel", "nbgrader", "nh3")
 PYTHON = "3.11"                       # as CI runs it (nbgrader 0.9.6 needs 3.11 or newer)

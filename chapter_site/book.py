@@ -141,6 +141,10 @@ def main(argv=None) -> int:
     p.add_argument("--out", type=Path, default=ROOT / "runs" / "site")
     args = p.parse_args(argv)
     r = build(args.run.resolve(), args.out.resolve())
+    run_commit = json.loads((args.run / "site" / "scrubber.json").read_text()).get("commit")
+    if run_commit != provenance.commit() or run_commit.endswith("-dirty"):
+        print(f"note: the run was made at {run_commit}, the site built at {provenance.commit()}: the page says "
+              f"so under the colophon; rebuild both from one clean commit (make site) to publish")
     print(f"site built in {r['seconds']} s -> {args.out / 'html' / 'index.html'}\n"
           f"landing page: {r['page_bytes'] / 1024:.0f} KB in {r['page_files']} files; "
           f"whole site {r['site_bytes'] / 1e6:.1f} MB")

@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parents[1]
 HEADLINE = [
     ("imagined_return_per_step", "imagined reward per step, in the dream", "{:+.3f}"),
     ("real_return_per_step", "real reward per step, in true PushT", "{:+.3f}"),
-    ("imagination_gap", "the imagination gap (imagined minus real)", "{:+.3f}"),
+    ("imagination_gap", "the imagination gap per step (imagined minus real)", "{:+.3f}"),
     ("real_success_rate", "real task success", "{:.0%}"),
     ("imagined_final_tee_dist", "dream: the block ends this far from the target (m)", "{:.3f}"),
     ("real_final_tee_dist", "reality: the block ends this far from the target (m)", "{:.3f}"),
@@ -57,7 +57,7 @@ def curves_html(data: dict) -> str:
     losses = svg.line_chart(
         [{"x": c["wm_recon"]["x"], "y": c["wm_recon"]["y"], "label": "reconstruction", "color": svg.INK},
          {"x": c["wm_dyn"]["x"], "y": c["wm_dyn"]["y"], "label": "dynamics", "color": svg.MUTED, "dash": "5 3"}],
-        "world-model update", "loss (MSE, normalised units; log scale)", "the world model's losses",
+        "world-model update", "loss (MSE, log scale)", "the world model's losses (MSE in normalised units)",
         log_y=True, chart_id="curve-wm")
     return ('<section class="panel" id="curves"><h2>Training in the dream, measured in both worlds</h2>'
             f'<p class="meta">{provenance(data)}. The imagined curve is the mean reward per step of each '
@@ -129,7 +129,7 @@ def notebooks_titles(notebooks: list[str]):
         yield n, Path(n).stem.replace("_", " ")
 
 
-def colophon_html(commit: str) -> str:
+def colophon_html(commit: str, run_commit: str | None = None) -> str:
     rows = "".join(f"<tr><td>{escape(r.notebook)}</td><td><code>{escape(r.module)}</code></td>"
                    f"<td><code>{escape(r.qualname)}</code></td><td>{escape(r.lines)}</td>"
                    f'<td><code title="{r.sha256}">{r.sha256[:12]}…</code></td></tr>'
@@ -137,15 +137,26 @@ def colophon_html(commit: str) -> str:
     return ('<section class="panel" id="colophon"><h2>Colophon · provenance</h2>'
             "<p>The notebooks show the package's own code, not a copy of it: each region below is "
             "displayed with <code>inspect.getsource</code>. The fingerprint is the sha256 of the text shown, "
-            f"at commit <code>{escape(commit)}</code>.</p><div class=\"scroll\"><table class=\"colophon\">"
+            f"at commit <code>{escape(commit)}</code>.{_mismatch(commit, run_commit)}</p>"
+            "<div class=\"scroll\"><table class=\"colophon\">"
             "<thead><tr><th>notebook</th><th>module</th><th>function</th><th>lines</th><th>sha256</th></tr>"
             f"</thead><tbody>{rows}</tbody></table></div></section>")
+
+
+def _mismatch(commit: str, run_commit: str | None) -> str:
+    """A visible warning where the run that made the curves and the scrubber is not the build's
+    commit, or either had uncommitted changes: then the fingerprints describe other code."""
+    if run_commit is None or (run_commit == commit and not commit.endswith("-dirty")):
+        return ""
+    return (f' <strong class="warn">Note: the run shown above was made at <code>{escape(run_commit)}</code>, '
+            f"the page built at <code>{escape(commit)}</code>; a commit ending in -dirty had uncommitted "
+            "changes. Rebuild both from one clean commit (make site) to publish.</strong>")
 
 
 def page(meta: dict, data: dict, notebooks: list[str], commit: str) -> str:
     """The landing page as MyST markdown (its panels as raw HTML)."""
     html = "\n".join([headline_html(meta), curves_html(data), scrubber_html(data), colab_html(notebooks),
                       '<section class="panel" id="wallclock"><h2>Wall-clock</h2>' + wallclock.table_html()
-                      + "</section>", colophon_html(commit)])
+                      + "</section>", colophon_html(commit, data.get("commit"))])
     intro = (ROOT / "book" / "intro.md").read_text()
     return f"{intro}\n```{{raw}} html\n{html}\n```\n\nRead next: [the reading list](reading.md).\n"

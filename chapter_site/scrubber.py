@@ -62,6 +62,7 @@ def export(out: Path, smoke: bool, seed: int = 0, log=print) -> Path:
     from pusht.config import make_config
     from pusht.data import EVAL_SEED_BASE, start_seeds
     from pusht.dreamer import agent_stage, world_model_stage
+    from pusht.env import CONTROL_DT
     from pusht.evaluate import dream_rollout, policy_of, real_rollout
 
     out = Path(out)
@@ -98,7 +99,7 @@ def export(out: Path, smoke: bool, seed: int = 0, log=print) -> Path:
         "measured_at": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         "commit": provenance.commit(), "host": provenance.host(),
         "seed": seed, "config": "smoke" if smoke else "default",
-        "start_seed": start, "horizon": cfg.eval_horizon, "control_dt_s": 0.1,
+        "start_seed": start, "horizon": cfg.eval_horizon, "control_dt_s": CONTROL_DT,
         "imag_iters": cfg.imag_iters, "monitor_starts": cfg.monitor_episodes,
         "same_as_chapter_agent": True,
         "frames": frames,

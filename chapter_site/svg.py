@@ -31,10 +31,10 @@ def _fmt(v: float) -> str:
 
 
 def line_chart(series: list[dict], xlabel: str, ylabel: str, title: str, width: int = 560,
-               height: int = 260, log_y: bool = False, chart_id: str = "") -> str:
+               height: int = 300, log_y: bool = False, chart_id: str = "") -> str:
     """A line chart. ``series``: dicts with ``x``, ``y``, ``label``, ``color`` and optionally
     ``markers`` (draw points) and ``dash``. Axes labelled, a legend on top."""
-    left, right, top, bottom = 58, 12, 34, 44
+    left, right, top, bottom = 76, 14, 40, 56
     xs = np.concatenate([np.asarray(s["x"], float) for s in series])
     ys = np.concatenate([np.asarray(s["y"], float) for s in series])
     if log_y:
@@ -60,14 +60,14 @@ def line_chart(series: list[dict], xlabel: str, ylabel: str, title: str, width: 
     for t in yt:
         label = _fmt(10 ** t) if log_y else _fmt(t)
         out.append(f'<line x1="{left}" x2="{left + pw}" y1="{py(t):.1f}" y2="{py(t):.1f}" stroke="{GRID}"/>'
-                   f'<text x="{left - 6}" y="{py(t) + 4:.1f}" text-anchor="end" class="tick">{label}</text>')
+                   f'<text x="{left - 6}" y="{py(t) + 5:.1f}" text-anchor="end" class="tick">{label}</text>')
     for t in xt:
         out.append(f'<line x1="{px(t):.1f}" x2="{px(t):.1f}" y1="{top + ph}" y2="{top + ph + 4}" stroke="{MUTED}"/>'
-                   f'<text x="{px(t):.1f}" y="{top + ph + 16}" text-anchor="middle" class="tick">{_fmt(t)}</text>')
+                   f'<text x="{px(t):.1f}" y="{top + ph + 20}" text-anchor="middle" class="tick">{_fmt(t)}</text>')
     out.append(f'<line x1="{left}" x2="{left + pw}" y1="{top + ph}" y2="{top + ph}" stroke="{MUTED}"/>'
                f'<line x1="{left}" x2="{left}" y1="{top}" y2="{top + ph}" stroke="{MUTED}"/>')
-    out.append(f'<text x="{left + pw / 2:.1f}" y="{height - 6}" text-anchor="middle" class="axis">{escape(xlabel)}</text>'
-               f'<text transform="translate(14 {top + ph / 2:.1f}) rotate(-90)" text-anchor="middle" '
+    out.append(f'<text x="{left + pw / 2:.1f}" y="{height - 8}" text-anchor="middle" class="axis">{escape(xlabel)}</text>'
+               f'<text transform="translate(18 {top + ph / 2:.1f}) rotate(-90)" text-anchor="middle" '
                f'class="axis">{escape(ylabel)}</text>')
     lx = left
     for s in series:
@@ -79,9 +79,9 @@ def line_chart(series: list[dict], xlabel: str, ylabel: str, title: str, width: 
         if s.get("markers"):
             out.extend(f'<circle cx="{p.split(",")[0]}" cy="{p.split(",")[1]}" r="3" fill="{s["color"]}"/>'
                        for p in pts.split())
-        out.append(f'<rect x="{lx}" y="10" width="14" height="4" fill="{s["color"]}"/>'
-                   f'<text x="{lx + 18}" y="16" class="legend">{escape(s["label"])}</text>')
-        lx += 26 + 7 * len(s["label"])
+        out.append(f'<rect x="{lx}" y="12" width="16" height="5" fill="{s["color"]}"/>'
+                   f'<text x="{lx + 20}" y="20" class="legend">{escape(s["label"])}</text>')
+        lx += 30 + 9 * len(s["label"])
     out.append("</svg>")
     return "".join(out)
 
@@ -117,7 +117,7 @@ def reward_bars(imagined: float, real: float, title: str, width: int = 320, heig
     return "".join(out)
 
 
-ARENA_HALF = 0.5   # m: the table's walls (pusht.env.ARENA_HALF)
+from pusht.env import ARENA_HALF  # noqa: E402  (m: the table's walls)
 
 
 def tee_points(x_mm: float, y_mm: float, yaw_deg: float, scale: float, size: int) -> list[str]:

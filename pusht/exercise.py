@@ -2,7 +2,7 @@
 
     python -m pusht.exercise ex1                 # asks for your prediction, then runs the experiment
     python -m pusht.exercise ex2 --smoke         # the tiny config: seconds
-    python -m pusht.exercise ex1 --predict b --reason "one sentence of why"    # no questions asked
+    python -m pusht.exercise ex1 --predict b --reason "the model never learned how the block moves"    # no questions asked
 
 Notebooks 04, 05 and 06 each hold one exercise: read the question, lock a prediction (a letter and
 one sentence of why), run the experiment, and read how the measurement compares. This module is the
@@ -357,6 +357,11 @@ def main(argv=None) -> int:
                          f"use --device cpu")
         session = start(ex, args.seed, args.smoke, args.device, args.out)
         options = show_question(ex)
+        if args.smoke:           # the question's words are the default config's
+            from pusht.env import CONTROL_DT
+            c = session.cfg
+            print(_wrap(f"(--smoke: a tiny config. Its evaluation lasts {c.eval_horizon * CONTROL_DT:g} s and "
+                        f"its loop {c.loop_rounds} rounds; the question's figures are the default config's.)"))
         lock(ex, options, args.predict, args.reason)
         locked = True
         run(ex, session)

@@ -13,7 +13,7 @@ Checked: every count the page shows (as data attributes, parsed back) equals the
 receipts; no line of any submission's code, of the solutions' hidden tests or of the gradebook's
 stored sources is in the page; hostile ids, names and messages are escaped; only flagged ids
 appear. In headless Chromium (``lane``): no console error, no request but the page, every figure
-decoded. ``test_report_time`` prints what ``write_class_report`` costs for 40 and 500 students.
+decoded. What ``write_class_report`` costs is in benchmarks/grading_wallclock.txt.
 """
 
 from __future__ import annotations
@@ -437,7 +437,7 @@ def test_hostile_strings_are_escaped_and_only_flagged_ids_appear(klass):
     assert "&lt;img src=x onerror=alert(1)&gt;&quot;&amp;" in text
     assert "\u202e" not in text and "U+202E" in text
     assert "<b>Zo" not in text and "&lt;b&gt;Zo\u00eb&lt;/b&gt;" in text
-    assert "&lt;script&gt;alert(&#x27;failed&#x27;)&lt;/script&gt;" in text        # the failure, escaped
+    assert "alert(" not in text.replace("onerror=alert(1)", "") and "RuntimeError (the message is in report.csv)" in text   # the failure: its type only
     assert "own run said so" not in text                           # the reconcile explanation: not shown
     assert not [t for t, a in p.tags if t in ("script", "iframe", "object", "embed", "base", "form")]
     assert not [k for _, a in p.tags for k in a if k.startswith("on")]
