@@ -251,6 +251,11 @@ class Verdict:
     test_id: str
     passed: bool               # every case matched: the cell earns all its points, else none
     message: str
+    # why, in one word: passed, delegation, not_probed, timeout, toolarge, unchecked (the probe
+    # failed), undefined (the cells above the test define no such function), raised (a case raised),
+    # wrong (numbers that differ); ``tripwire.py`` reads it
+    kind: str = ""
+    errors: list = field(default_factory=list)     # the exceptions the cases raised, one line each
 
 
 def judge(test: Test, probed: dict | None, delegation: list[str] | None = None) -> Verdict:
@@ -261,20 +266,27 @@ def judge(test: Test, probed: dict | None, delegation: list[str] | None = None) 
     if delegation:
         return Verdict(test.test_id, False,
                        f"no credit: your `{test.function}` reaches the package's own implementation "
-                       f"({'; '.join(delegation[:3])}). This exercise asks you to write it yourself.")
+                       f"({'; '.join(delegation[:3])}). This exercise asks you to write it yourself.", "delegation")
     if probed is None:
-        return Verdict(test.test_id, False, "this test was not checked: the notebook holding it was not graded")
+        return Verdict(test.test_id, False, "this test was not checked: the notebook holding it was not graded",
+                       "not_probed")
     setup = probed.get("setup") or []
     defining = f" (defining it: {setup[0][:200]})" if setup else ""
     status = probed.get("status")
     if status == "timeout":
-        return Verdict(test.test_id, False, f"your `{test.function}` did not finish the checks in time{defining}")
+        return Verdict(test.test_id, False, f"your `{test.function}` did not finish the checks in time{defining}",
+                       "timeout")
     if status == "toolarge":
-        return Verdict(test.test_id, False, f"your `{test.function}` returned far more numbers than the checks need")
+        return Verdict(test.test_id, False, f"your `{test.function}` returned far more numbers than the checks need",
+                       "toolarge")
     if status != "ok" or probed.get("results") is None:
         return Verdict(test.test_id, False, f"your `{test.function}` could not be checked: "
-                                            f"{(setup[0] if setup else status)[:300]}")
+                                            f"{(setup[0] if setup else status)[:300]}", "unchecked")
     saved = probed["results"]
+    errors = [r for r in saved if isinstance(r, str)]
+    if errors and len(errors) == len(saved) and all(UNDEFINED_MARK in r for r in errors):
+        return Verdict(test.test_id, False, f"0 of {len(saved)} checks passed: {errors[0][:300]}{defining}",
+                       "undefined", errors[:1])
     refs = reference_results(test, int(probed["fresh"]))
     passed = 0
     first = None
@@ -300,5 +312,11 @@ def judge(test: Test, probed: dict | None, delegation: list[str] | None = None) 
             first = f"check {i + 1}: {case.hint} ({why})"
     n = len(test.cases)
     if passed == n:
-        return Verdict(test.test_id, True, f"all {n} checks passed")
-    return Verdict(test.test_id, False, f"{passed} of {n} checks passed; first failure: {first}{defining}")
+        return Verdict(test.test_id, True, f"all {n} checks passed", "passed")
+    return Verdict(test.test_id, False, f"{passed} of {n} checks passed; first failure: {first}{defining}",
+                   "raised" if errors else "wrong", sorted(set(e[:200] for e in errors))[:5])
+
+
+# what the probe process answers, for every case, when the cells above the test define no such
+# function (``pusht.probe_server``): "`name` is not defined by the cells above the test cell"
+UNDEFINED_MARK = "by the cells above the test cell"

@@ -363,6 +363,8 @@ def gather(course: Path, report: dict, submitted: dict | None = None) -> dict:
                 flags.append(("delegation unclear", s, note))
         for name, error in sorted((rep.get("failed") or {}).items()):
             flags.append(("not finished", s, f"{name}: {_error_line(error)}"))
+        for line in rep.get("tripwires") or ():      # the kernel ran it, the grader could not: 0 until decided
+            flags.append(("grader could not run it", s, str(line)))
         lms = rep.get("lms")
         if isinstance(lms, dict) and lms.get("late"):
             who = " ".join(str(lms.get(k)) for k in ("name",) if lms.get(k))

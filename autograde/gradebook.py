@@ -63,7 +63,17 @@ def record(course: Path, report: dict, results: dict) -> None:
                             v = vars(checks.judge(checks.TESTS[g], "", delegation=found))
                         grade.manual_score = grade.max_score if v["passed"] else 0.0
                         grade.needs_manual_grade = False
-                        rep["verdicts"][g] = (grade.manual_score, grade.max_score, v["message"])
+                        message = v["message"]
+                        if v.get("tripwire") and not found:
+                            decided = (student, nb_id, g) in manual
+                            message += f" NOTE: {v['tripwire']}" if not decided else \
+                                " NOTE: the grader could not run your function again; your instructor looked at it."
+                            if not decided:          # the instructor's call (manual_grade), not a silent 0
+                                rep.setdefault("tripwires", []).append(f"{nb_id} {g}: {v['tripwire']}")
+                                rep.setdefault("undecided", []).append((nb_id, g, float(grade.max_score)))
+                                rep["notes"].append(f"NEEDS A HUMAN: {nb_id} {g}: {v['tripwire']} (manual_grade "
+                                                    f"{student} {nb_id} {g} SCORE decides it)")
+                        rep["verdicts"][g] = (grade.manual_score, grade.max_score, message)
                     ex = g[:-len("_order")] if g.endswith("_order") else None
                     if ex in rep["completion"]:
                         ok, why = rep["completion"][ex]
@@ -81,6 +91,8 @@ def record(course: Path, report: dict, results: dict) -> None:
                         if 0 <= score <= grade.max_score:
                             grade.manual_score = score
                             grade.needs_manual_grade = False
+                            if g in rep["verdicts"]:        # the instructor's decision is the score shown
+                                rep["verdicts"][g] = (score,) + tuple(rep["verdicts"][g][1:])
                             comment = (row.get("comment") or "") + (f"\n\n{comment}" if comment else "")
                         else:
                             rep["notes"].append(f"manual grade {row['score']!r} for {nb_id} {g} refused: "

@@ -256,6 +256,7 @@ def read_standings(course: Path, report: dict) -> tuple[dict[str, Standing], flo
                     "no notebook of theirs could be graded (report.csv says why): 0 points, as in grades.csv"])
                 continue
             st = Standing(0.0, total)
+            undecided = {(nb, g) for nb, g, _ in (report[student] or {}).get("undecided") or ()}
             for nb in sorted(sub.notebooks, key=lambda n: n.name):
                 grades = list(nb.grades)
                 touched = any(g.auto_score is not None or g.manual_score is not None or not g.needs_manual_grade
@@ -269,6 +270,9 @@ def read_standings(course: Path, report: dict) -> tuple[dict[str, Standing], flo
                     by_hand = (isinstance(g.cell, TaskCell) or g.cell.cell_type == "markdown"
                                or g.name in solutions.get(nb.name, ()))
                     if by_hand and g.manual_score is None and g.auto_score is None:
+                        st.pending.append((nb.name, g.name, float(g.max_score)))
+                        continue
+                    if (nb.name, g.name) in undecided:     # the tripwire: the instructor decides first
                         st.pending.append((nb.name, g.name, float(g.max_score)))
                         continue
                     if g.manual_score is None and g.auto_score is None:

@@ -4,9 +4,10 @@ The kernel that runs a hand-in is the student's: anything it writes, prints or l
 forged. So no verdict reads it. For each hidden test, the grader instead:
 
 1. takes the hand-in's cells above the test cell, as the kernel would run them (``cellcode``), and
-   keeps what defines the graded function: every import, function and class definition, and every
-   other top-level statement that binds a name the function needs, directly or through what it
-   needs (``program``): no training, no plotting, no experiment;
+   keeps every statement that can affect the graded function (``recreate.program``: every import
+   and definition, every statement of the student's but those that provably change nothing the
+   function needs, and the release's own statements that bind or change what it needs): no
+   training, no plotting, no experiment of the chapter's;
 2. chooses a fresh nonce (``secrets``) that seeds the cases' random inputs;
 3. sends the statements, the cases and the nonce to a probe server (``pusht.probe_server``) that
    it started itself in a sandbox of its own (bubblewrap, no network, the student's leased uid,
@@ -36,142 +37,18 @@ import os
 import secrets
 import select
 import subprocess
-import symtable
 import sys
 import textwrap
 import time
 from pathlib import Path
 
 from . import cellcode, checks, sandbox, stripped
+from .recreate import program, release_statements, test_cell_index  # noqa: F401  the probe's program
 
-SETUP = (ast.Import, ast.ImportFrom, ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)
 PROBE_SECONDS = 120          # per test: defining the function and every case
 
 
-# --- what to run: the definitions above the test cell ----------------------------------------------
-def _base_name(node) -> str | None:
-    """``X`` of ``X``, ``X.a.b`` or ``X[i][j]``: the name whose value an access starts from."""
-    while isinstance(node, (ast.Attribute, ast.Subscript)):
-        node = node.value
-    return node.id if isinstance(node, ast.Name) else None
-
-
-def _bound(node, sets_globals: dict | None = None, values: set | None = None) -> set[str]:
-    """Names a top-level statement binds or changes (not inside the functions, classes or lambdas
-    it defines): assignment, import, ``del``, a store into ``X[...]`` or ``X.attr`` (augmented too),
-    ``setattr(X, ...)``, a call of a notebook function that declares ``global X`` (``sets_globals``:
-    {function: names}), and a method called on ``X`` where ``X`` is one of ``values``, the names the
-    notebook assigns itself (``X.update(...)``, ``X.append(...)``): not a module's function
-    (``torch.manual_seed(0)`` changes no name the graded function would need)."""
-    if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
-        return {node.name}
-    sets_globals, values = sets_globals or {}, values or set()
-    out, todo = set(), [node]
-    while todo:
-        n = todo.pop()
-        if isinstance(n, (ast.Import, ast.ImportFrom)):
-            out |= {(a.asname or a.name).split(".")[0] for a in n.names}
-        elif isinstance(n, ast.Name) and isinstance(n.ctx, (ast.Store, ast.Del)):
-            out.add(n.id)
-        elif isinstance(n, (ast.Attribute, ast.Subscript)) and isinstance(n.ctx, (ast.Store, ast.Del)):
-            out.add(_base_name(n))
-        elif isinstance(n, ast.Call):
-            f = n.func
-            if isinstance(f, ast.Attribute) and _base_name(f.value) in values:
-                out.add(_base_name(f.value))
-            elif isinstance(f, ast.Name):
-                out |= sets_globals.get(f.id, set())
-                if f.id == "setattr" and n.args:
-                    out.add(_base_name(n.args[0]))
-        elif isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
-            out.add(n.name)
-            continue
-        elif isinstance(n, ast.Lambda):
-            continue
-        elif isinstance(n, (ast.MatchAs, ast.MatchStar)) and n.name:
-            out.add(n.name)
-        todo.extend(ast.iter_child_nodes(n))
-    out.discard(None)
-    return out
-
-
-def _global_writes(node) -> set[str]:
-    """Names a function definition declares ``global`` anywhere in its body."""
-    return {name for n in ast.walk(node) if isinstance(n, ast.Global) for name in n.names}
-
-
-def _reads(node) -> set[str]:
-    """The global names a statement can read when it runs or when the functions it defines run:
-    its own names at the top level (defaults and decorators included), and in every function,
-    class, lambda and comprehension inside it the names that are global there, not their locals
-    (Python's own symbol tables, ``symtable``)."""
-    try:
-        table = symtable.symtable(ast.unparse(node), "<statement>", "exec")
-    except Exception:          # noqa: BLE001  cannot be read: every name it spells
-        return {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
-    out, todo = set(), [table]
-    while todo:
-        t = todo.pop()
-        top = t.get_type() == "module"
-        out |= {s.get_name() for s in t.get_symbols() if s.is_referenced() and (top or s.is_global())}
-        todo.extend(t.get_children())
-    return out
-
-
-def test_cell_index(cells, test_id: str) -> int | None:
-    for i, cell in enumerate(cells):
-        if cellcode.gid(cell) == test_id and cell.get("cell_type") == "code":
-            return i
-    return None
-
-
-def program(cells, test_id: str, function: str) -> list[tuple[str, str]]:
-    """[(label, statement source)] that define ``function`` as the cells above the test cell do.
-
-    Every import and definition is kept (they are cheap, and a function may reach them at run time
-    by any name); any other statement is kept where it binds or changes a name that the function
-    reads, or that a statement it needs reads, and so on (``_bound``): a constant, an alias, a table
-    and the entries put into it, a default argument, a global a configuring call sets. A statement
-    that only the notebook's other code needs (training, plotting) is left out. Statements are kept
-    in notebook order, so a later definition replaces an earlier one as it did in the kernel. The
-    work is linear in the notebook's statements (each name is looked up once)."""
-    end = test_cell_index(cells, test_id)
-    stmts = []
-    for i, cell in enumerate(cells[:end] if end is not None else cells):
-        if cell.get("cell_type") != "code":
-            continue
-        tree = cellcode.parse(cellcode.source(cell))
-        for node in tree.body if tree is not None else []:
-            stmts.append((f"<cell {i + 1}, line {getattr(node, 'lineno', 0)}>", node))
-    setup = [isinstance(node, SETUP) for _, node in stmts]
-    sets_globals = {node.name: _global_writes(node) for _, node in stmts
-                    if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and _global_writes(node)}
-    values = {n.id for _, node in stmts if not isinstance(node, SETUP)
-              for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)}
-    binders: dict[str, list[int]] = {}          # name -> the statements that bind or change it
-    for k, (_, node) in enumerate(stmts):
-        for name in _bound(node, sets_globals, values):
-            binders.setdefault(name, []).append(k)
-    needed = [False] * len(stmts)
-    todo, seen = [function], {function}
-    while todo:                                  # each name and each statement once: linear
-        for k in binders.get(todo.pop(), ()):
-            if not needed[k]:
-                needed[k] = True
-                for name in _reads(stmts[k][1]) - seen:
-                    seen.add(name)
-                    todo.append(name)
-    keep = [a or b for a, b in zip(setup, needed)]
-    out = []
-    for k, (label, node) in enumerate(stmts):
-        if keep[k]:
-            try:
-                out.append((label, ast.unparse(node)))
-            except Exception:          # noqa: BLE001  a tree unparse cannot print: the kernel could not run it
-                continue
-    return out
-
-
+# --- what to run: ``recreate.program`` ----------------------------------------------------------------
 def warm_statements(release) -> list[str]:
     """The release notebooks' top-level imports: the probe server imports them once, before forking."""
     out = []

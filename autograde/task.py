@@ -24,7 +24,7 @@ from pathlib import Path
 
 import nbformat
 
-from . import checks, probe, sandbox
+from . import checks, probe, sandbox, tripwire
 from .course import ASSIGNMENT, _last_error, private_course, tool_env
 
 
@@ -35,12 +35,13 @@ _JUDGING = threading.Lock()
 
 
 def probe_verdicts(notebooks: dict, warm: list[str], uid: int | None, confine: bool, limits: dict,
-                   timeout: int = probe.PROBE_SECONDS) -> dict:
+                   timeout: int = probe.PROBE_SECONDS, ours: dict | None = None) -> dict:
     """{notebook: {test id: verdict}} for the hidden tests of ``notebooks`` ({file name: JSON text}):
     each graded function defined from the hand-in's own cells and probed in a probe server of
     this task's own (``probe.py``), then judged here against the real implementations
     (``judge_locked``). ``timeout``: seconds for each test's probes (the cell timeout: what the
-    test cell had in the kernel)."""
+    test cell had in the kernel). ``ours``: {file name: the release's own statements}
+    (``recreate.release_statements``), which are kept only where the function needs them."""
     out = {}
     todo = []
     for name, text in notebooks.items():
@@ -51,7 +52,8 @@ def probe_verdicts(notebooks: dict, warm: list[str], uid: int | None, confine: b
             cells = nbformat.reads(text, as_version=4).cells
         except Exception:         # noqa: BLE001  repaired by prepare_student: cannot happen, costs nothing
             cells = []
-        todo += [(name, t, probe.program(cells, t.test_id, t.function)) for t in tests]
+        own = (ours or {}).get(name, frozenset())
+        todo += [(name, t, probe.program(cells, t.test_id, t.function, own)) for t in tests]
     if not todo:
         return out
     with probe.ProbeServer(uid, limits, warm, confine=confine, seconds=timeout) as server:
@@ -114,7 +116,8 @@ def grade_task(bundle: bytes, student: str, notebooks: dict, timeout: int, confi
                                 stderr=subprocess.PIPE, env=tool_env(), start_new_session=True)
         tail = _Tail(proc.stderr)
         try:
-            verdicts = probe_verdicts(notebooks, _warm_statements(bundle), lease.uid, confine, limits, timeout)
+            verdicts = probe_verdicts(notebooks, _warm_statements(bundle), lease.uid, confine, limits, timeout,
+                                      _release_statements(bundle))
         finally:
             budget = limits["wall_seconds"] * max(1, len(notebooks)) + 120
             try:
@@ -146,6 +149,8 @@ def grade_task(bundle: bytes, student: str, notebooks: dict, timeout: int, confi
             data = _read_capped(src / n, MAX_NOTEBOOK_BYTES)
             if data is not None:
                 out["autograded"][n] = data.decode("utf-8", errors="replace")
+            if n in verdicts:          # a function the kernel ran and the probe could not: a human looks
+                tripwire.mark(verdicts[n], out["autograded"].get(n))
             elif (src / n).exists() and n in result:
                 result[n]["note"] = (f"its graded copy is larger than {MAX_NOTEBOOK_BYTES >> 20} MB (its outputs): "
                                      f"no feedback page is made for it")
@@ -212,11 +217,23 @@ class _Tail:
 
 
 @lru_cache(maxsize=4)
-def _warm_statements(bundle: bytes) -> list[str]:
-    """The release's imports (``probe.warm_statements``), read from a course bundle."""
+def _release(bundle: bytes) -> dict:
+    """{file name: notebook} of the student release in a course bundle."""
     release = {}
     with zipfile.ZipFile(io.BytesIO(bundle)) as zf:
         for name in zf.namelist():
             if name.startswith(f"release/{ASSIGNMENT}/") and name.endswith(".ipynb"):
-                release[name] = nbformat.reads(zf.read(name).decode("utf-8"), as_version=4)
-    return probe.warm_statements(release)
+                release[name.rsplit("/", 1)[1]] = nbformat.reads(zf.read(name).decode("utf-8"), as_version=4)
+    return release
+
+
+@lru_cache(maxsize=4)
+def _warm_statements(bundle: bytes) -> list[str]:
+    """The release's imports (``probe.warm_statements``), read from a course bundle."""
+    return probe.warm_statements(_release(bundle))
+
+
+@lru_cache(maxsize=4)
+def _release_statements(bundle: bytes) -> dict:
+    """{file name: the release's own statements} (``recreate.release_statements``)."""
+    return {name: probe.release_statements(nb) for name, nb in _release(bundle).items()}

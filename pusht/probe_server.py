@@ -61,6 +61,74 @@ def warm(statements: list[str]) -> None:
             pass
 
 
+DEFINE_SECONDS = 60.0          # the statements above the test cell, all together, at most
+SETUP_SECONDS = 5.0            # each definition or import after that budget is spent
+
+
+class _OutOfTime(BaseException):
+    """Raised in a statement that re-ran longer than the definitions' budget."""
+
+
+def _future_flags(code) -> int:
+    import __future__
+
+    return code.co_flags & sum(getattr(__future__, f).compiler_flag for f in __future__.all_feature_names)
+
+
+def define(program: list, ns: dict, budget: float, function: str | None = None) -> list[str]:
+    """Run ``program`` ([(label, source)], the statements above the test cell in notebook order) in
+    ``ns`` as the kernel ran them; returns what went wrong, one line per statement.
+
+    Each statement is compiled under the ``__future__`` flags in force at that point, as IPython
+    does (a ``from __future__ import annotations`` holds for every later cell), and registered as
+    IPython registers a cell, so that ``inspect.getsource`` (``torch.jit.script``, say) finds it.
+    One that raises does not stop the others. Together they have ``budget`` seconds; once it is
+    spent, only imports and definitions run, each for at most ``SETUP_SECONDS``. The lines of the
+    statements that bind ``function`` come first (the learner reads the first)."""
+    import ast
+    import time
+
+    flags, out, first = 0, [], []
+    deadline = time.monotonic() + budget
+
+    def alarm(signum, frame):
+        raise _OutOfTime()
+
+    old = signal.signal(signal.SIGALRM, alarm)
+    try:
+        for label, src in program:
+            linecache.cache[label] = (len(src), None, src.splitlines(True), label)
+            try:
+                code = compile(src, label, "exec", flags=flags, dont_inherit=True)
+            except BaseException as e:     # noqa: BLE001  the kernel could not have run it either
+                out.append(f"{label}: {type(e).__name__}: {str(e)[:200]}")
+                continue
+            flags |= _future_flags(code)
+            left = deadline - time.monotonic()
+            if left <= 0:
+                try:
+                    kind = type(ast.parse(src).body[0]).__name__
+                except Exception:          # noqa: BLE001
+                    kind = ""
+                if kind not in ("Import", "ImportFrom", "FunctionDef", "AsyncFunctionDef", "ClassDef"):
+                    out.append(f"{label}: not run: the cells above the test took more than {budget:.0f} s")
+                    continue
+                left = SETUP_SECONDS
+            signal.setitimer(signal.ITIMER_REAL, left)
+            try:
+                exec(code, ns)
+            except BaseException as e:     # noqa: BLE001  the cell's own error, as the kernel had it
+                line = (f"{label}: stopped: the cells above the test took more than {budget:.0f} s to run again"
+                        if isinstance(e, _OutOfTime) else f"{label}: {type(e).__name__}: {str(e)[:200]}")
+                (first if function and function in code.co_names else out).append(line)
+            finally:
+                signal.setitimer(signal.ITIMER_REAL, 0)
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+    return first + out
+
+
 def _child(req: dict, w: int) -> None:
     """In the forked child: define, probe, write the results to ``w``; never returns."""
     import resource
@@ -81,15 +149,7 @@ def _child(req: dict, w: int) -> None:
         main = types.ModuleType("__main__")
         sys.modules["__main__"] = main
         ns = main.__dict__
-        setup = []
-        for label, src in req["program"]:
-            # registered as IPython registers a cell, so that inspect.getsource (torch.jit.script,
-            # say) finds it; compiled without this module's own __future__ flags
-            linecache.cache[label] = (len(src), None, src.splitlines(True), label)
-            try:
-                exec(compile(src, label, "exec", dont_inherit=True), ns)
-            except BaseException as e:     # noqa: BLE001  the cell's own error, as the kernel had it
-                setup.append(f"{label}: {type(e).__name__}: {str(e)[:200]}")
+        setup = define(req["program"], ns, min(DEFINE_SECONDS, seconds / 2), req["function"])
         helpers = {}
         for name, src in req.get("helpers", {}).items():
             space = {"torch": __import__("torch"), "__name__": "pusht_helpers"}
@@ -99,7 +159,7 @@ def _child(req: dict, w: int) -> None:
         n = len(req["cases"])
         if not callable(fn):
             why = (f"`{req['function']}` is not defined by the cells above the test cell"
-                   if fn is None else f"`{req['function']}` is not a function")
+                   if fn is None else f"`{req['function']}` is not a function by the cells above the test cell")
             results = [why] * n
         else:
             results = grading.run_probes(req["cases"], fn, int(req["fresh"]), helpers)

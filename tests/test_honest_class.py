@@ -70,6 +70,14 @@ def test_the_instructors_solutions_earn_every_automatic_and_completion_point(hon
     assert all(ok for ok, _ in report["solutions"]["completion"].values())
 
 
+def test_the_tripwire_fires_on_no_honest_hand_in(honest):
+    """Every honest function is defined again by the probe as the kernel had it (autograde/recreate.py):
+    no verdict of this class needs a human."""
+    _, report, _, _ = honest
+    fired = {s: r.get("tripwires") for s, r in report.items() if r.get("tripwires")}
+    assert not fired, fired
+
+
 @pytest.mark.parametrize("student", sorted(s for s in honest_class.STUDENTS if s != "solutions"))
 def test_every_honest_variant_earns_what_the_solutions_earn(honest, student):
     course, report, _, _ = honest
