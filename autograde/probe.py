@@ -61,9 +61,11 @@ def warm_statements(release) -> list[str]:
 
 
 def helpers_for(test) -> dict[str, str]:
-    """Source of the functions a test's cases hand to the student's function (``{"fn": name}``):
+    """Source of the functions a test's cases hand to the student's function (``{"fn": name}``, or
+    named in a generated case's ``"helpers"``):
     sent to that test's probe alone, never present anywhere else in the probe process."""
     names = {a["fn"] for c in test.cases for a in c.spec.get("args", []) if isinstance(a, dict) and "fn" in a}
+    names |= {name for c in test.cases for name in c.spec.get("helpers", [])}      # a generated case's
     out = {}
     for name in sorted(names):
         source = inspect.getsource(checks.reference_function(checks.HELPERS[name]))

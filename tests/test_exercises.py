@@ -212,8 +212,7 @@ def test_block_disagreement():
     good = solution(nb, "block_disagreement_impl", "block_disagreement")
     run_visible(nb, tests_id, block_disagreement=good)
     assert hidden(test, good).passed
-    for wrong, hint in ((disagreement_sample_variance, "POPULATION variances"),
-                        (disagreement_normalised_units, "in metres"),
+    for wrong, hint in ((disagreement_normalised_units, "in metres"),
                         (disagreement_std_not_squared, "std squared"),
                         (disagreement_all_dims, "only the block centre"),
                         (disagreement_plain_root, "not NaN")):
@@ -223,6 +222,10 @@ def test_block_disagreement():
     with pytest.raises(AssertionError, match="carry gradient"):   # the visible tests catch this one
         run_visible(nb, tests_id, block_disagreement=disagreement_detached)
     assert "not differentiable" in hidden(test, disagreement_detached).message
+    with pytest.raises(AssertionError, match="disagree by 0.25"):  # and this one, by the case worked by hand
+        run_visible(nb, tests_id, block_disagreement=disagreement_sample_variance)
+    v = hidden(test, disagreement_sample_variance)
+    assert not v.passed and "POPULATION variances" in v.message, v.message
 
 
 @pytest.mark.parametrize("test", list(checks.TESTS.values()), ids=list(checks.TESTS))

@@ -205,7 +205,7 @@ assert r.shape == (1,), f"for input of shape (1, 6) the reward should have shape
 assert abs(r.item()) < 1e-5, f"the T on the target should score 0, got {r.item():.4f}"
 assert abs(pos.item()) < 1e-5 and abs(ang.item()) < 1e-5, "pos_err and ang_err should be 0 on the target"
 
-# 2. Known poses: 0.5 m away, then a quarter turn on the target.
+# 2. Known poses: 0.5 m away, then a quarter turn and a half turn on the target.
 r, pos, ang = reward_from_obs(to_norm([pose(0.0, 0.0, 0.3, 0.4, 0.0)]), MEAN, STD)
 assert abs(pos.item() - 0.5) < 1e-4, f"the T at (0.3, 0.4) m is 0.5 m away, got pos_err {pos.item():.4f}"
 assert abs(r.item() + 0.5) < 1e-4, (f"0.5 m away and not turned should score -0.5, got {r.item():.4f}; "
@@ -213,6 +213,8 @@ assert abs(r.item() + 0.5) < 1e-4, (f"0.5 m away and not turned should score -0.
 r, pos, ang = reward_from_obs(to_norm([pose(0.0, 0.0, 0.0, 0.0, math.pi / 2)]), MEAN, STD)
 assert abs(ang.item() - math.pi / 2) < 1e-4, f"yaw pi/2 should give ang_err pi/2, got {ang.item():.4f}"
 assert abs(r.item() + 0.25) < 1e-4, f"a quarter turn on the target should score -0.25, got {r.item():.4f}"
+r, pos, ang = reward_from_obs(to_norm([pose(0.0, 0.0, 0.0, 0.0, math.pi)]), MEAN, STD)
+assert abs(r.item() + 0.5) < 1e-4, f"a half turn on the target should score -0.5, got {r.item():.4f}"
 
 # 3. Many known poses at once, with a leading shape (3, 5): T centres in a +-0.4 m box, yaws over
 #    two full turns either way, pushers anywhere.

@@ -180,6 +180,10 @@ __import__("pusht.grading").grading.submit("lambda_return_impl_tests", lambda_re
 G = lambda_return(torch.tensor([[1.0], [2.0]]), torch.tensor([[10.0], [20.0], [30.0]]), 0.5, 0.5)
 assert tuple(G.shape) == (2, 1), f"rewards (2, 1) should give returns of shape (2, 1), got {tuple(G.shape)}"
 assert torch.allclose(G, torch.tensor([[10.25], [17.0]])), f"expected [[10.25], [17.0]], got {G.tolist()}"
+#    One step (H = 1): G_0 = r_0 + gamma * ((1 - lam) * V_1 + lam * G_1) with G_1 = V_1, so with
+#    r_0 = 2, V_1 = 7 and gamma = 0.5, G_0 = 2 + 0.5 * 7 = 5.5 whatever lam is.
+G = lambda_return(torch.tensor([[2.0]]), torch.tensor([[5.0], [7.0]]), 0.5, 0.3)
+assert torch.allclose(G, torch.tensor([[5.5]])), f"H = 1: expected [[5.5]], got {G.tolist()}"
 
 # 2. The training's shapes, and the one-step limit: with lam = 0, G_t = r_t + gamma * V_{t+1}.
 g = torch.Generator().manual_seed(0)

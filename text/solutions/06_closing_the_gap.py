@@ -320,7 +320,7 @@ def block_disagreement(frames, std):
 # is made outside this kernel (autograde/checks.py).
 __import__("pusht.grading").grading.submit("block_disagreement_impl_tests", block_disagreement)
 ### END HIDDEN TESTS
-# Shapes and properties only: the values themselves are checked by the grader.
+# Shapes, properties and one case by hand: the grader checks the values on cases of its own.
 _g = torch.Generator().manual_seed(0)
 _std = torch.tensor([0.2, 0.2, 0.15, 0.15, 0.7, 0.7])
 
@@ -333,13 +333,22 @@ assert tuple(_d.shape) == (cfg.imag_horizon, 64), \
 assert torch.isfinite(_d).all() and (_d >= 0).all(), "a spread is finite and >= 0"
 assert _d.requires_grad, "the result must carry gradient to the frames (stay in torch: no .item(), numpy, no_grad)"
 
-# 2. Members that agree do not disagree.
+# 2. A case by hand (std 1, so normalised units are metres): two members put the block centre at
+#    (0.1, 0.2) and (0.4, 0.6), 0.5 m apart; each is 0.25 m from their mean, so they disagree by 0.25
+#    (population variances: var_x + var_y = 0.15^2 + 0.2^2 = 0.0625, divided by K, not K - 1).
+_pair = torch.tensor([[[0.0, 0.0, 0.1, 0.2, 0.0, 1.0]], [[0.0, 0.0, 0.4, 0.6, 0.0, 1.0]]])   # (K, B, D) = (2, 1, 6)
+_d = block_disagreement(_pair, torch.ones(6))
+assert tuple(_d.shape) == (1,), f"frames (2, 1, 6) should give shape (1,), got {tuple(_d.shape)}"
+assert torch.allclose(_d, torch.tensor([0.25]), atol=1e-6), \
+    f"two members 0.5 m apart should disagree by 0.25 (half the distance; divide by K, not K - 1), got {_d.tolist()}"
+
+# 3. Members that agree do not disagree.
 _same = torch.tensor([0.5, -0.25, 0.125, 0.75, 0.0, 1.0]).repeat(3, 4, 1)      # (K, B, D) = (3, 4, 6)
 _d = block_disagreement(_same, _std)
 assert tuple(_d.shape) == (4,), f"frames (3, 4, 6) should give shape (4,), got {tuple(_d.shape)}"
 assert torch.allclose(_d, torch.zeros(4)), f"identical members should give 0, got {_d.tolist()}"
 
-# 3. Moving every member by the same amount changes nothing: only their spread counts.
+# 4. Moving every member by the same amount changes nothing: only their spread counts.
 _x = torch.randn(3, 5, 6, generator=_g)
 assert torch.allclose(block_disagreement(_x + 0.3, _std), block_disagreement(_x, _std), atol=1e-5), \
     "shifting all members together should not change their disagreement"
