@@ -6,6 +6,7 @@
 #   make grade    grade a class: make grade SUBMISSIONS=lms_download.zip [SCHEDULER=tcp://host:8786] [REGRADE=1]
 #                 -> autograde/grades.csv, report.csv, canvas_import.csv, moodle_import.csv, class_report.html
 #   make gradescope  the Gradescope autograder zip -> runs/gradescope/autograder.zip [OUT=path.zip]
+#                 [CONFINE=allow: grade unconfined where no sandbox starts; default: require one]
 #   make icu      PyICU, which grading needs to find look-alike student ids (make test and make grade run it)
 #   make browser  Chromium and Playwright, for the feedback pages' browser test (make test runs it)
 #   make lab      JupyterLab on the student notebooks (instructors: jupyter lab solutions/)
@@ -150,10 +151,13 @@ grade: setup sandbox icu
 	$(PY) -m autograde.grade "$(SUBMISSIONS)" $(if $(SCHEDULER),--scheduler $(SCHEDULER)) $(if $(REGRADE),--regrade)
 
 # The Gradescope autograder (autograde/gradescope.py): setup.sh and run_autograder at the zip's root,
-# this package vendored at the commit built. Upload it on the assignment's Configure Autograder page
-# (README, "Grading on Gradescope"). OUT defaults to runs/gradescope/autograder.zip.
+# what grading needs of this package at the commit built (no solutions, tests or site builder). Upload
+# it on the assignment's Configure Autograder page (README, "Grading on Gradescope"). OUT defaults to
+# runs/gradescope/autograder.zip. By default the bundle grades nothing where no sandbox starts;
+# CONFINE=allow builds one that grades there unconfined, with a warning now and in every result.
+CONFINE ?= require
 gradescope: setup
-	$(PY) -m autograde.gradescope build "$(if $(OUT),$(OUT),runs/gradescope/autograder.zip)"
+	$(PY) -m autograde.gradescope build "$(if $(OUT),$(OUT),runs/gradescope/autograder.zip)" --confine "$(CONFINE)"
 
 lab: setup
 	$(VENV)/bin/jupyter lab notebooks/

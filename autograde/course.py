@@ -50,7 +50,14 @@ def binder_url(notebook: str) -> str:
 COURSE_ID = "zero2robot-ch3.2"      # the same as in nbgrader_config.py
 
 
-NOTEBOOKS = sorted(p.name for p in (ROOT / "solutions").glob("*.ipynb"))
+# nbgrader's source of the assignment: the instructor's notebooks, solutions/. The Gradescope bundle
+# holds no solutions/ but GRADING_SOURCE: the same notebooks with every solution taken out, of which
+# nbgrader makes the same release and gradebook (autograde/gradescope.py, grading_source).
+GRADING_SOURCE = "grading_source"
+SOURCE = ROOT / "solutions" if (ROOT / "solutions").is_dir() else ROOT / GRADING_SOURCE
+
+
+NOTEBOOKS = sorted(p.name for p in SOURCE.glob("*.ipynb"))
 
 
 # The completion task cell of each predict-then-run exercise: "<ex>_order".
@@ -72,10 +79,11 @@ def nbgrader(course: Path, *args: str, timeout: int | None = None) -> subprocess
 
 
 def prepare_course(course: Path) -> None:
-    """Copy solutions/ into the course's source folder and (re)generate the assignment."""
+    """Copy the assignment's source (solutions/, ``SOURCE``) into the course's source folder and
+    (re)generate the assignment."""
     src = course / "source" / ASSIGNMENT
     src.mkdir(parents=True, exist_ok=True)
-    for path in (ROOT / "solutions").glob("*.ipynb"):
+    for path in SOURCE.glob("*.ipynb"):
         shutil.copy(path, src / path.name)
     if course.resolve() != HERE:
         shutil.copy(HERE / "nbgrader_config.py", course / "nbgrader_config.py")

@@ -1,6 +1,6 @@
 """The course's grader as a Gradescope autograder: one hand-in graded, ``results.json`` written.
 
-    python -m autograde.gradescope build OUT.zip [--timeout 120] [--visibility visible] [--confine auto]
+    python -m autograde.gradescope build OUT.zip [--timeout 120] [--visibility visible] [--confine require]
     python -m autograde.gradescope run          (what the bundle's run_autograder calls, per submission)
     python -m autograde.gradescope check        (what setup.sh calls last: can kernels be confined here?)
 
@@ -17,12 +17,19 @@ the source of that page: github.com/gradescope/autograder_samples, docs/specs.md
   ``/autograder/run_autograder`` in ``/autograder``, as root; what it prints is kept in
   ``/autograder/results/stdout`` for the instructor, and ``/autograder/results/results.json`` is
   uploaded as the result.
-* ``course/``: this package's source (``pusht``, ``autograde``, the solutions, ``course.yaml``,
-  ``pyproject.toml``) as the working tree holds it at build time, so the grader on Gradescope is the
-  commit built, never fetched later; ``gradescope.json`` records that commit (and any files that
-  differed from it) with the build's settings. ``requirements-gradescope.txt``: what grading needs
-  of ``requirements.txt``, with its pins (the loose ones pinned to the versions the building venv
-  holds, the ones this course's CI ran).
+* ``course/``: what grading reads of this package, as the working tree holds it at build time, so
+  the grader on Gradescope is the commit built, never fetched later: ``pusht`` (the students'
+  kernels import it), ``autograde`` less what no grading step imports or reads (``classes/``, the
+  test classes; ``manual_grade.py``, ``dask_preload.py``, ``mark_scheme.yaml``), ``course.yaml``, and
+  ``pyproject.toml`` listing only those packages. Not the solutions: ``grading_source/`` holds the
+  instructor's notebooks with every solution taken out (``grading_source``: the hidden tests and
+  every other cell kept), of which nbgrader makes the same release and gradebook (``build`` checks
+  that, ``same_assignment``); the verdicts come from ``autograde/checks.py`` against the package's
+  own implementations, never from the solutions. Not the site builder, the tests, the README.
+  ``gradescope.json`` records the commit (and any files that differed from it) with the build's
+  settings. ``requirements-gradescope.txt``: what grading needs of ``requirements.txt``, with its
+  pins (the loose ones pinned to the versions the building venv holds, the ones this course's CI
+  ran).
 * ``setup.sh`` installs bubblewrap (apt), Python as CI runs it (3.11: a standalone build that ``uv``,
   installed from PyPI, puts in /opt/pusht-python, since nbgrader 0.9.6 needs 3.11 and Ubuntu 22.04
   has 3.10), a venv in ``course/.venv`` with torch's CPU build from PyTorch's own index
@@ -53,16 +60,21 @@ Each test's ``visibility`` is ``visible`` unless ``build --visibility`` says oth
 ``after_due_date``, ``after_published``, the spec's values). A graded cell of a notebook the
 submission lacks scores 0 and says so: Gradescope grades each submission on its own and keeps the
 last, so the notebooks must be submitted together. Nothing of the hidden tests, the solutions or
-the mark scheme is written: every string that reaches ``results.json`` or stdout has any line of
-a hidden test or solution region of the instructor's notebooks (but lines the student release
-shows too) replaced by ``[hidden]``, and ``tests/test_gradescope.py`` checks ``results.json`` for
-each such line. A ``results.json`` saying that grading did not finish is written first, so a crash
+the mark scheme is written: the solutions and the mark scheme are not in the bundle, and every
+string that reaches ``results.json`` or stdout has any line of a hidden test of the assignment's
+notebooks (``secret_lines``: of ``course.SOURCE``, the bundle's ``grading_source/``; but lines the
+student release shows too) replaced by ``[hidden]``; ``tests/test_gradescope.py`` checks
+``results.json`` and stdout for every line of the instructor's hidden tests and solutions. A ``results.json`` saying that grading did not finish is written first, so a crash
 or a killed run still leaves one (docs/best_practices.md).
 
-Confinement: ``run`` grades in bubblewrap sandboxes where ``sandbox.available()`` says they start;
-otherwise unconfined, with the warning in stdout, unless the bundle was built with ``--confine
-require`` (then nothing is graded and the student is told to ask the instructor). What that means
-on Gradescope is in the README ("Grading on Gradescope").
+Confinement: ``run`` grades in bubblewrap sandboxes where ``sandbox.available()`` says they start.
+Where none starts, a bundle built with ``--confine require`` (the default, ``make gradescope``)
+grades nothing and tells the student to ask the instructor, and ``setup.sh``'s last step (``check``)
+fails the image build where that is certain (no bubblewrap, or one older than 0.7, as on Gradescope's
+default Ubuntu 22.04 image). Only a bundle built with ``--confine allow`` (``make gradescope
+CONFINE=allow``) grades there unconfined: the build prints a warning, and every student's
+``results.json`` says how it was graded (a visible 0-point test first, and when unconfined the top
+of the output). What that means on Gradescope is in the README ("Grading on Gradescope").
 
 The root of the container layout is ``$GRADESCOPE_ROOT`` (default ``/autograder``), so tests
 emulate it in a temporary folder. How otter-grader builds its Gradescope zip was read for
@@ -95,9 +107,17 @@ DEFAULT_ROOT = "/autograder"
 JOBS_ENV = "GRADESCOPE_JOBS"          # grading tasks at once; default: from the container's CPU quota
 STUDENT = "student"                   # the hand-in's id in the one-student course
 CONFIG = "gradescope.json"            # in the bundle's root: what was built, with which settings
+CONFINE = ("require", "allow")        # build --confine: require (the default) grades nothing unconfined
 REQUIREMENTS = "requirements-gradescope.txt"
-VENDORED = ("pyproject.toml", "README.md", "requirements.txt", "course.yaml", "solutions", "pusht",
-            "autograde", "chapter_site")          # the package as pyproject.toml lists it, and the course
+# What grading reads of the working tree: the course's settings, the students' package (the kernels
+# import it) and the grader. Not the solutions (the bundle carries GRADING_SOURCE instead: see
+# grading_source), the site builder, the tests, the README or requirements.txt (setup.sh installs
+# from REQUIREMENTS).
+VENDORED = ("pyproject.toml", "course.yaml", "pusht", "autograde")
+# of those, what no grading step imports or reads: the test classes (autograde/classes: hostile
+# hand-ins, honest variants, LMS downloads), the command-line tools for manual grades and Dask
+# workers, and the mark scheme (on Gradescope the sentences are a manually graded question)
+NOT_NEEDED = re.compile(r"^autograde/(classes/|manual_grade\.py$|dask_preload\.py$|mark_scheme\.yaml$)")
 NOT_VENDORED = re.compile(r"(^|/)(__pycache__|\.ipynb_checkpoints)(/|$)|\.pyc$|^autograde/(source|release|"
                           r"submitted|autograded|feedback|shared_stages)/|^autograde/(gradebook\.db|gradebook\."
                           r"template\.db|grades\.csv|report\.csv|manual_grades\.csv|graded\.json|\.grading\.lock|"
@@ -122,31 +142,56 @@ MANUAL_MISSING = (" {notebook} is not in this submission, so there is nothing to
 
 
 # --- build ---------------------------------------------------------------------------------------
-def build(out: Path, timeout: int = 120, visibility: str = "visible", confine: str = "auto") -> dict:
-    """Write the Gradescope autograder zip to ``out``; returns its ``gradescope.json``."""
-    from .course import ROOT
+UNCONFINED_BUILD = """\
+################################################################################################
+WARNING: this bundle grades UNCONFINED wherever no bubblewrap sandbox starts (built with
+--confine allow). Gradescope's default image, Ubuntu 22.04, has bubblewrap 0.6.1, too old for the
+sandbox, and Docker's default seccomp profile refuses bwrap: there a student's code runs as root
+beside the grader, can read the hidden tests and can write its own results.json. Every student's
+results will say that grading was not confined. Build without --confine allow (the default,
+--confine require) to have such a submission refused instead, and choose Ubuntu 24.04 as the base
+image on the Configure Autograder page.
+################################################################################################"""
 
+
+def build(out: Path, timeout: int = 120, visibility: str = "visible", confine: str = "require",
+          log=None) -> dict:
+    """Write the Gradescope autograder zip to ``out``; returns its ``gradescope.json``.
+
+    ``confine``: "require" (the default) grades nothing where no sandbox starts; "allow" grades
+    there unconfined, and says so loudly now (``log``, default stderr) and in every result."""
+    from .course import GRADING_SOURCE, ROOT
+
+    log = log or (lambda line: print(line, file=sys.stderr, flush=True))
     if visibility not in VISIBILITIES:
         raise ValueError(f"visibility must be one of {', '.join(VISIBILITIES)}")
-    if confine not in ("auto", "require"):
-        raise ValueError("confine must be auto or require")
+    if confine not in CONFINE:
+        raise ValueError(f"confine must be one of {', '.join(CONFINE)}")
     files = _vendored_files(ROOT)
-    commit, modified = _git_state(ROOT, files)
+    solutions = sorted((ROOT / "solutions").glob("*.ipynb"))
+    commit, modified = _git_state(ROOT, files + [p.relative_to(ROOT).as_posix() for p in solutions])
+    source = {p.name: grading_source(p.read_text(encoding="utf-8")) for p in solutions}
+    same_assignment(solutions, source)
     config = {"commit": commit, "modified": modified, "timeout": int(timeout), "visibility": visibility,
               "confine": confine, "python": PYTHON, "uv": UV, "torch_index": TORCH_INDEX}
     requirements = grading_requirements((ROOT / "requirements.txt").read_text())
     torch = next(line for line in requirements.splitlines() if re.match(r"torch\b", line))
     members = {"setup.sh": (setup_script(torch), 0o755), "run_autograder": (RUN_AUTOGRADER, 0o755),
                CONFIG: (json.dumps(config, indent=1) + "\n", 0o644), REQUIREMENTS: (requirements, 0o644)}
+    course = {rel: (ROOT / rel).read_bytes() for rel in files}
+    course["pyproject.toml"] = bundle_pyproject(course["pyproject.toml"].decode(), files).encode()
+    course.update({f"{GRADING_SOURCE}/{name}": text.encode() for name, text in source.items()})
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(out.name + ".part")
     with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zf:
         for name, (text, mode) in members.items():
             _add(zf, name, text.encode(), mode)
-        for rel in files:
-            _add(zf, f"course/{rel}", (ROOT / rel).read_bytes(), 0o644)
+        for rel in sorted(course):
+            _add(zf, f"course/{rel}", course[rel], 0o644)
     os.replace(tmp, out)
+    if confine == "allow":
+        log(UNCONFINED_BUILD)
     return config
 
 
@@ -158,7 +203,8 @@ def _add(zf: zipfile.ZipFile, name: str, data: bytes, mode: int) -> None:
 
 
 def _vendored_files(root: Path) -> list[str]:
-    """The files of ``VENDORED`` that git would commit (tracked, or new and not ignored), that exist."""
+    """The files of ``VENDORED`` that git would commit (tracked, or new and not ignored), that exist
+    and that grading needs (``NOT_NEEDED``)."""
     try:
         out = subprocess.run(["git", "-C", str(root), "ls-files", "-z", "-co", "--exclude-standard", "--",
                               *VENDORED], capture_output=True, check=True).stdout.decode()
@@ -168,21 +214,122 @@ def _vendored_files(root: Path) -> list[str]:
         for top in VENDORED:
             p = root / top
             names += [top] if p.is_file() else [q.relative_to(root).as_posix() for q in p.rglob("*") if q.is_file()]
-    return sorted({n for n in names if not NOT_VENDORED.search(n) and (root / n).is_file()
-                   and not (root / n).is_symlink()})
+    return sorted({n for n in names if not NOT_VENDORED.search(n) and not NOT_NEEDED.search(n)
+                   and (root / n).is_file() and not (root / n).is_symlink()})
 
 
 def _git_state(root: Path, files: list[str]) -> tuple[str | None, list[str]]:
-    """(the commit checked out, the vendored files that differ from it), or (None, []) without git."""
+    """(the commit checked out, those of ``files`` that differ from it), or (None, []) without git."""
     try:
         commit = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True,
                                 check=True, text=True).stdout.strip()
-        status = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "-z", "--", *VENDORED],
-                                capture_output=True, check=True).stdout.decode()
+        status = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "-z", "--", *VENDORED,
+                                 "solutions"], capture_output=True, check=True).stdout.decode()
     except (OSError, subprocess.CalledProcessError):
         return None, []
     changed = {entry[3:] for entry in status.split("\0") if len(entry) > 3}
     return commit, sorted(changed & set(files))
+
+
+def bundle_pyproject(text: str, files: list[str]) -> str:
+    """pyproject.toml as the bundle holds it: the packages it lists less those not vendored (the
+    site builder, the test classes), no readme (not vendored); ``pip install -e`` needs no more."""
+    import tomllib
+
+    listed = tomllib.loads(text)["tool"]["setuptools"]["packages"]
+    kept = [p for p in listed if f"{p.replace('.', '/')}/__init__.py" in files]
+    text, n = re.subn(r"(?m)^packages = \[.*\]$", "packages = " + json.dumps(kept), text)
+    text = re.sub(r"(?m)^readme = .*\n", "", text)
+    if n != 1 or tomllib.loads(text)["tool"]["setuptools"]["packages"] != kept:
+        raise ValueError("pyproject.toml: its [tool.setuptools] packages line could not be rewritten for the bundle")
+    return ("# pyproject.toml as the Gradescope bundle holds it (autograde/gradescope.py, bundle_pyproject):\n"
+            "# only the packages the bundle carries\n" + text)
+
+
+SOLUTION_BEGIN, SOLUTION_END = "BEGIN SOLUTION", "END SOLUTION"     # nbgrader's ClearSolutions defaults
+
+
+def grading_source(text: str) -> str:
+    """The instructor's notebook ``text`` (JSON) as the bundle carries it, for nbgrader's
+    ``generate_assignment``: every solution taken out, all else kept (the hidden tests, which the
+    gradebook must hold, the locked cells, the cell ids and metadata).
+
+    nbgrader replaces each solution region (the lines from one holding ``BEGIN SOLUTION`` to one
+    holding ``END SOLUTION``) with its stub, indented as the first line, and a solution cell
+    without a region (a one-sentence answer) with its stub whole, before it saves any cell in the
+    gradebook (``ClearSolutions`` precedes ``SaveCells``). So the region's lines are dropped here,
+    its delimiters kept, and a solution cell without a region is emptied: nbgrader makes the same
+    release and gradebook of this as of the solutions (``same_assignment`` checks it at each
+    build). Outputs are dropped too (nbgrader clears them anyway)."""
+    import nbformat
+
+    nb = nbformat.reads(text, as_version=4)
+    for cell in nb.cells:
+        if cell.cell_type == "code":
+            cell.outputs, cell.execution_count = [], None
+        lines, kept, inside, region = cell.source.split("\n"), [], False, False
+        for line in lines:
+            if SOLUTION_BEGIN in line:
+                if inside:
+                    raise ValueError(f"a solution region inside another: {cell.source[:200]!r}")
+                inside = region = True
+                kept.append(line)
+            elif SOLUTION_END in line:
+                inside = False
+                kept.append(line)
+            elif not inside:
+                kept.append(line)
+        if inside:
+            raise ValueError(f"a solution region without its end: {cell.source[:200]!r}")
+        if region:
+            cell.source = "\n".join(kept)
+        elif cell.get("metadata", {}).get("nbgrader", {}).get("solution"):
+            cell.source = ""
+    return nbformat.writes(nb) + "\n"
+
+
+def same_assignment(solutions: list[Path], source: dict[str, str]) -> None:
+    """Raise ValueError unless nbgrader's ``generate_assignment`` makes the same student release and
+    the same gradebook (every cell it saves: grade, solution, task and source cells, with their
+    sources, hidden tests included, and checksums) of the bundle's notebooks ``source`` ({name:
+    JSON}) as of the instructor's ``solutions``."""
+    made = []
+    with tempfile.TemporaryDirectory(prefix="pusht-gradescope-build-") as tmp:
+        for which, notebooks in (("solutions", {p.name: p.read_text(encoding="utf-8") for p in solutions}),
+                                 ("bundle", source)):
+            made.append(_generated(Path(tmp) / which, notebooks))
+    if made[0] != made[1]:
+        differ = sorted(k for k in set(made[0]) | set(made[1]) if made[0].get(k) != made[1].get(k))
+        raise ValueError("nbgrader makes a different assignment of the bundle's notebooks than of the solutions "
+                         f"(grading_source cannot strip them safely): {', '.join(differ[:10])}")
+
+
+def _generated(course: Path, notebooks: dict[str, str]) -> dict:
+    """{what: value} of the assignment nbgrader generates from ``notebooks`` in a new ``course``."""
+    import nbformat
+    from nbgrader.api import Gradebook
+
+    from .course import ASSIGNMENT, COURSE_ID, HERE, nbgrader_api
+
+    src = course / "source" / ASSIGNMENT
+    src.mkdir(parents=True)
+    for name, text in notebooks.items():
+        (src / name).write_text(text, encoding="utf-8")
+    shutil.copy(HERE / "nbgrader_config.py", course / "nbgrader_config.py")
+    res = nbgrader_api(course).generate_assignment(ASSIGNMENT, force=True)
+    if not res.get("success"):
+        raise ValueError(f"nbgrader generate_assignment failed:\n{(res.get('error') or res.get('log') or '')[-3000:]}")
+    out = {}
+    for path in sorted((course / "release" / ASSIGNMENT).glob("*.ipynb")):
+        out[f"release {path.name}"] = json.dumps(nbformat.read(path, as_version=4), sort_keys=True)
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
+        for nb in gb.find_assignment(ASSIGNMENT).notebooks:
+            out[f"gradebook {nb.name}"] = json.dumps({
+                "grade": sorted((c.name, c.cell_type, c.max_score) for c in nb.grade_cells),
+                "solution": sorted(c.name for c in nb.solution_cells),
+                "task": sorted((c.name, c.cell_type, c.max_score) for c in nb.task_cells),
+                "source": sorted((c.name, c.cell_type, c.locked, c.source, c.checksum) for c in nb.source_cells)})
+    return out
 
 
 def grading_requirements(text: str) -> str:
@@ -222,7 +369,9 @@ VENV="$COURSE/.venv"
 export DEBIAN_FRONTEND=noninteractive PIP_DISABLE_PIP_VERSION_CHECK=1 UV_PYTHON_INSTALL_DIR=/opt/pusht-python
 apt-get update -qq
 # bubblewrap confines the students' kernels (autograde/sandbox.py) and must be 0.7 or newer (--size):
-# Ubuntu 24.04 has 0.9; Ubuntu 22.04 has 0.6.1, with which grading runs unconfined (run's log says so).
+# Ubuntu 24.04 has 0.9; Ubuntu 22.04 (Gradescope's default image) has 0.6.1, with which a bundle built
+# --confine require (the default) fails here, at the check below, and one built --confine allow grades
+# unconfined, saying so in every student's results.
 apt-get install -y -qq --no-install-recommends ca-certificates bubblewrap util-linux python3 python3-venv
 bwrap --version || true
 # Python {PYTHON}, as CI runs it, whatever the image's own: uv (PyPI) installs a standalone build.
@@ -241,7 +390,8 @@ PY="$VENV/bin/python"
 # bytecode now: the kernels read the package read-only and would compile it on every import
 "$PY" -m compileall -q "$COURSE/pusht" "$COURSE/autograde"
 chmod -R a+rX /opt/pusht-python "$VENV" "$COURSE/pusht"        # the students' kernels read these
-"$PY" -m autograde.gradescope check
+# last: can kernels be confined here? Fails the image build where a bundle that requires it never can be.
+"$PY" -m autograde.gradescope check --config "$SRC/{CONFIG}"
 """
 
 
@@ -266,15 +416,18 @@ def run(root: Path | None = None, log=print, sweep=None) -> dict:
     root = Path(root or os.environ.get(ROOT_ENV) or DEFAULT_ROOT)
     path = root / "results" / "results.json"
     config = bundle_config(root)
-    _write_json(path, _unfinished())
+    _write_json(path, _unfinished(config))
     secrets: list[str] = []
     say = lambda line: log(redact(str(line), secrets))          # noqa: E731  stdout: the instructor's
+    state: dict = {}
     try:
-        results = _grade(root / "submission", config, say, secrets)
+        results = _grade(root / "submission", config, say, secrets, state)
     except Exception:                               # noqa: BLE001  results.json must say something
         say(traceback.format_exc())
         results = {"score": 0.0, "output": "The autograder failed on this submission, so nothing was graded. "
                    "Your instructor can see what went wrong.", "tests": []}
+    if confinement(config) == "allow":
+        _say_confinement(results, state.get("confined"))
     results.update({"execution_time": round(time.monotonic() - started), "output_format": "text",
                     "test_output_format": "text", "stdout_visibility": "hidden"})
     results = _redacted(results, secrets)
@@ -287,8 +440,8 @@ def run(root: Path | None = None, log=print, sweep=None) -> dict:
 
 
 def bundle_config(root: Path) -> dict:
-    """The bundle's ``gradescope.json`` (defaults where it is missing)."""
-    config = {"timeout": 120, "visibility": "visible", "confine": "auto"}
+    """The bundle's ``gradescope.json`` (defaults where it is missing: confinement required)."""
+    config = {"timeout": 120, "visibility": "visible", "confine": "require"}
     try:
         config.update(json.loads((root / "source" / CONFIG).read_text()))
     except (OSError, ValueError):
@@ -296,36 +449,83 @@ def bundle_config(root: Path) -> dict:
     return config
 
 
-def _unfinished() -> dict:
-    return {"score": 0.0, "output": "Grading did not finish (it ran out of time or memory, or crashed), so "
-            "nothing was graded. Check that your notebooks run, then submit again or ask your instructor.",
-            "output_format": "text", "stdout_visibility": "hidden", "tests": []}
+def confinement(config: dict) -> str:
+    """"require" or "allow": the bundle's ``--confine`` (a bundle built before "allow" says "auto",
+    which meant the same; anything else requires a sandbox)."""
+    return "allow" if config.get("confine") in ("allow", "auto") else "require"
 
 
-def _grade(submission: Path, config: dict, log, secrets: list[str]) -> dict:
+SANDBOX_TEST = "Grading sandbox: read this"
+UNCONFINED_NOTE = (
+    "WARNING: your notebooks were graded WITHOUT a sandbox. The autograder could not start one on this "
+    "machine, and your instructor set it up to grade without one there, so your code ran with the "
+    "autograder's own rights, where it could have changed this result. Your instructor sees this warning "
+    "too and may check your result by hand.")
+CONFINED_NOTE = (
+    "Your notebooks were graded in a sandbox, as they should be. This autograder is set up to grade without "
+    "one on a machine where none starts, and would then say so here.")
+UNKNOWN_NOTE = (
+    "WARNING: this autograder is set up to grade without a sandbox on a machine where none starts, and it "
+    "stopped before it could tell whether one started for this submission. Your instructor sees this "
+    "warning too.")
+
+
+def _say_confinement(results: dict, confined: bool | None) -> None:
+    """In an "allow" bundle, every result says how it was graded: a 0-point test first, visible at once
+    whatever the bundle's visibility, and, when grading was (or may have been) unconfined, the top
+    of the output too."""
+    note = CONFINED_NOTE if confined else UNCONFINED_NOTE if confined is False else UNKNOWN_NOTE
+    results["tests"] = [{"name": SANDBOX_TEST, "score": 0.0, "max_score": 0.0, "output": note,
+                         "status": "passed" if confined else "failed", "visibility": "visible"}] + results["tests"]
+    if not confined:
+        results["output"] = note + "\n\n" + results.get("output", "")
+
+
+def _unfinished(config: dict | None = None) -> dict:
+    results = {"score": 0.0, "output": "Grading did not finish (it ran out of time or memory, or crashed), so "
+               "nothing was graded. Check that your notebooks run, then submit again or ask your instructor.",
+               "output_format": "text", "stdout_visibility": "hidden", "tests": []}
+    if config is not None and confinement(config) == "allow":
+        _say_confinement(results, None)
+    return results
+
+
+def _grade(submission: Path, config: dict, log, secrets: list[str], state: dict | None = None) -> dict:
+    """Grade the hand-in in ``submission``; ``state["confined"]``: whether a sandbox started."""
     from . import grade, sandbox
-    from .course import ROOT
+    from .course import SOURCE
 
-    secrets[:] = secret_lines(ROOT / "solutions")
+    state = {} if state is None else state
+    secrets[:] = secret_lines(SOURCE)
     work = Path(tempfile.mkdtemp(prefix="pusht-gradescope-"))
     os.chmod(work, 0o755)
     try:
         staged, notes = stage(submission, work / "hand-in" / STUDENT)
         log(f"bundle: commit {config.get('commit')}" + (f", with changes to {', '.join(config['modified'])}"
                                                          if config.get("modified") else "")
-            + f"; grading with {Path(grade.__file__).parent} and {sandbox.PACKAGE_DIR}")
+            + f"; grading with {Path(grade.__file__).parent} and {sandbox.PACKAGE_DIR}, the assignment from {SOURCE}")
         log(f"hand-in: {', '.join(staged) or 'no notebook of this assignment'}")
+        ok, why = sandbox.available()
+        state["confined"] = ok
+        mode = confinement(config)
+        log(f"confinement: {'bubblewrap sandboxes' if ok else 'NONE (' + why + ')'} (bundle built with --confine "
+            f"{mode})")
+        if not ok:
+            log("WARNING: " + ("no sandbox starts here, and this bundle requires one: nothing is graded. Choose "
+                               "Ubuntu 24.04 as the base image (bubblewrap 0.7 or newer)" if mode == "require" else
+                               "no sandbox starts here, and this bundle allows grading without one: the student's "
+                               "code runs as root beside the grader; the student's results say so"))
         report, scores = {}, {}
         if staged:
-            ok, why = sandbox.available()
-            log(f"confinement: {'bubblewrap sandboxes' if ok else 'NONE (' + why + ')'}")
-            if not ok and config.get("confine") == "require":
+            if not ok and mode == "require":
                 return {"score": 0.0, "tests": [], "output": "The autograder could not start its sandbox on this "
                         "machine, so your notebooks were not graded. Please tell your instructor."}
             course = work / "course"
             course.mkdir()
+            # share=False: the shared stages are computed from the instructor's solutions, which the
+            # bundle does not hold (one student would never share them anyway)
             report = grade.grade_class(work / "hand-in", course, timeout=int(config.get("timeout", 120)),
-                                       jobs=jobs(), log=log, progress=False).get(STUDENT, {})
+                                       jobs=jobs(), log=log, confine=ok, progress=False, share=False).get(STUDENT, {})
             scores = _scores(course)
         return results(staged, notes, report, scores, config.get("visibility", "visible"), log)
     finally:
@@ -389,11 +589,11 @@ def graded_cells() -> list[dict]:
     "task"}, from the instructor's notebooks' nbgrader metadata (ids and points only)."""
     import nbformat
 
-    from .course import NOTEBOOKS, ROOT
+    from .course import NOTEBOOKS, SOURCE
 
     out = []
     for name in NOTEBOOKS:
-        for cell in nbformat.read(ROOT / "solutions" / name, as_version=4).cells:
+        for cell in nbformat.read(SOURCE / name, as_version=4).cells:
             m = cell.get("metadata", {}).get("nbgrader", {})
             if (m.get("grade") or m.get("task")) and m.get("grade_id"):
                 out.append({"notebook": name, "grade_id": m["grade_id"], "points": float(m.get("points", 0)),
@@ -528,15 +728,16 @@ def jobs() -> int:
 
 
 # --- nothing hidden leaks ------------------------------------------------------------------------
-def secret_lines(solutions: Path) -> list[str]:
-    """The lines of the instructor's notebooks that students never see: inside a hidden-test or
+def secret_lines(source: Path) -> list[str]:
+    """The lines of the notebooks in ``source`` that students never see: inside a hidden-test or
     solution region, or in a solution cell without regions (a one-sentence answer), less lines the
     notebooks also hold outside those (the release shows those). Longest first; lines under
-    ``MIN_SECRET_CHARS`` characters are left out."""
+    ``MIN_SECRET_CHARS`` characters are left out. Of the instructor's solutions/, all of those; of
+    the bundle's grading_source/, the hidden tests (it holds no solution)."""
     import nbformat
 
     secret, public = set(), set()
-    for path in sorted(Path(solutions).glob("*.ipynb")):
+    for path in sorted(Path(source).glob("*.ipynb")):
         for cell in nbformat.read(path, as_version=4).cells:
             lines = [l.strip() for l in cell.get("source", "").splitlines()]
             m = cell.get("metadata", {}).get("nbgrader", {})
@@ -629,15 +830,46 @@ def _kill_children(rounds: int = 50) -> list[str]:
 
 
 # --- command line --------------------------------------------------------------------------------
-def check(log=print) -> bool:
-    """What setup.sh prints last: whether kernels can be confined on this machine (at image-build
-    time; a submission's container may differ, and run says again)."""
+MIN_BWRAP = (0, 7)                    # --size, which the sandbox's tmpfs caps use
+
+
+def bwrap_version() -> tuple[int, ...] | None:
+    """The installed bubblewrap's version, or None where there is none (or it does not say)."""
+    try:
+        out = subprocess.run(["bwrap", "--version"], capture_output=True, text=True, timeout=20).stdout
+    except (OSError, subprocess.SubprocessError):
+        return None
+    m = re.search(r"(\d+)\.(\d+)(?:\.(\d+))?", out)
+    return tuple(int(x) for x in m.groups() if x is not None) if m else None
+
+
+def check(config: dict | None = None, log=print) -> bool:
+    """What setup.sh runs last, at image-build time: whether kernels can be confined on this machine
+    (a submission's container may differ, and run checks again). False, which fails the image build,
+    only where a bundle that requires confinement can never have it here: no bubblewrap, or one older
+    than 0.7 (Gradescope's default Ubuntu 22.04 image has 0.6.1); the instructor sees that on the
+    Configure Autograder page at once, not in every student's refused submission."""
     from . import sandbox
 
+    mode = confinement(config or {})
     ok, why = sandbox.available()
     log(f"autograde.gradescope: Python {sys.version.split()[0]} at {sys.executable}; confined grading "
-        + ("available (bubblewrap)" if ok else f"NOT available here: {why}"))
-    return ok
+        + ("available (bubblewrap)" if ok else f"NOT available here: {why}") + f"; bundle built with --confine {mode}")
+    if ok:
+        return True
+    version = bwrap_version()
+    never = version is None or version < MIN_BWRAP
+    if mode == "require" and never:
+        log(f"ERROR: this bundle grades only in a sandbox (--confine require), and bubblewrap "
+            f"{'is not installed' if version is None else '.'.join(map(str, version)) + ' is older than 0.7'} in "
+            f"this image: every submission would be refused. Choose Ubuntu 24.04 as the base image on the "
+            f"Configure Autograder page (or build the bundle with --confine allow, which grades unconfined here).")
+        return False
+    log("WARNING: " + ("no sandbox starts while the image is built; each submission checks again, and is refused "
+                       "where none starts (--confine require). Try one with Test Autograder." if mode == "require" else
+                       "no sandbox starts here, and this bundle grades without one (--confine allow): student "
+                       "code would run as root beside the grader, and every student's results will say so."))
+    return True
 
 
 def main(argv=None) -> int:
@@ -648,21 +880,28 @@ def main(argv=None) -> int:
     b.add_argument("--timeout", type=int, default=120, help="seconds per cell before it is interrupted")
     b.add_argument("--visibility", choices=VISIBILITIES, default="visible",
                    help="when students see each automatic test's result (the spec's values)")
-    b.add_argument("--confine", choices=("auto", "require"), default="auto",
-                   help="require: grade nothing where bubblewrap sandboxes cannot start")
+    b.add_argument("--confine", choices=CONFINE, default="require",
+                   help="require (the default): grade nothing where bubblewrap sandboxes cannot start; allow: "
+                        "grade there unconfined, with a warning now and in every student's results")
     sub.add_parser("run", help="grade $GRADESCOPE_ROOT/submission (default /autograder) -> results/results.json")
-    sub.add_parser("check", help="say whether student code can be confined here")
+    c = sub.add_parser("check", help="say whether student code can be confined here (setup.sh runs it)")
+    c.add_argument("--config", type=Path, help="the bundle's gradescope.json (its --confine)")
     args = p.parse_args(argv)
     if args.cmd == "build":
         config = build(args.out, args.timeout, args.visibility, args.confine)
         size = args.out.stat().st_size
         print(f"{args.out}: {size / 1024:.0f} KB, commit {config['commit']}"
               + (f" with changes to {len(config['modified'])} files" if config["modified"] else "")
-              + ": upload it on the assignment's Configure Autograder page")
+              + f", --confine {config['confine']}: upload it on the assignment's Configure Autograder page")
         return 0
     if args.cmd == "check":
-        check()
-        return 0
+        config = {}
+        if args.config is not None:
+            try:
+                config = json.loads(args.config.read_text())
+            except (OSError, ValueError):
+                pass
+        return 0 if check(config) else 1
     _become_subreaper()
     run(log=lambda line: print(line, flush=True), sweep=_kill_children)
     return 0

@@ -56,7 +56,9 @@ import socket
 import stat
 import subprocess
 import sys
+import threading
 import time
+from contextlib import contextmanager
 from functools import lru_cache
 from pathlib import Path
 
@@ -228,6 +230,27 @@ def uid_lock_dir() -> Path:
     raise RuntimeError("no folder for the grading uid locks could be made: " + "; ".join(tried))
 
 
+_RECORDERS: list[list[int]] = []         # the lists of recording_leases, while they record
+_RECORDERS_LOCK = threading.Lock()
+
+
+@contextmanager
+def recording_leases():
+    """``with recording_leases() as leased: grade_class(...)``: ``leased`` lists the uid of every
+    lease ``allocate_uid`` hands out in this process meanwhile (a local run's tasks are threads of
+    it, the instructor's reference run included; a Dask worker's leases are its own). A check of a
+    run's leftovers looks at these uids alone: another grading run on the host runs as others, or
+    as these once this run has given them back (tests/conftest.py, ``leftovers_of``)."""
+    leased: list[int] = []
+    with _RECORDERS_LOCK:
+        _RECORDERS.append(leased)
+    try:
+        yield leased
+    finally:
+        with _RECORDERS_LOCK:
+            _RECORDERS.remove(leased)
+
+
 def allocate_uid() -> UidLease:
     """Lease a student uid no other grading task on this host holds (root only; else a lease of no
     uid). The first uid of ``STUDENT_UIDS`` whose lock file this process can lock, and that no live
@@ -255,6 +278,9 @@ def allocate_uid() -> UidLease:
             os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
         except OSError:
             pass
+        with _RECORDERS_LOCK:
+            for leased in _RECORDERS:
+                leased.append(uid)
         return UidLease(uid, fd, path)
     raise RuntimeError(
         f"all {len(STUDENT_UIDS)} student uids ({STUDENT_UIDS.start}-{STUDENT_UIDS.stop - 1}) are taken on this "

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import nbformat
 
-from .course import HERE, ROOT
+from .course import HERE, ROOT, SOURCE
 from .schedule import _split, run_tasks
 
 
@@ -38,7 +38,10 @@ def shared_stages(bundle: bytes, course: Path, jobs: int, scheduler, timeout: in
     under the same name is therefore the same stage, computed from the same inputs. The shared
     folder is read-only inside every student's sandbox, and nothing a student writes reaches it.
     """
-    notebooks = {p.name: p.read_text(encoding="utf-8") for p in sorted((ROOT / "solutions").glob("*.ipynb"))}
+    if SOURCE != ROOT / "solutions":
+        raise RuntimeError(f"shared stages are computed by grading the instructor's solutions, and this copy of "
+                           f"the course has none ({SOURCE.name}/ only): grade with share=False")
+    notebooks = {p.name: p.read_text(encoding="utf-8") for p in sorted(SOURCE.glob("*.ipynb"))}
     stages, failed = {}, []
 
     def on_done(task, out):
@@ -70,7 +73,7 @@ def grader_fingerprint(timeout: int, confine: bool, limits: dict) -> str:
     """Everything besides the submission that decides a student's results: the solutions, the
     grader's code and tests, the package, the settings. A change to any of it regrades everyone."""
     h = hashlib.sha256(json.dumps([timeout, confine, sorted(limits.items())]).encode())
-    files = sorted((ROOT / "solutions").glob("*.ipynb")) + sorted(HERE.glob("*.py")) + \
+    files = sorted(SOURCE.glob("*.ipynb")) + sorted(HERE.glob("*.py")) + \
         sorted((ROOT / "pusht").rglob("*.py"))
     for p in files:
         h.update(p.relative_to(ROOT).as_posix().encode() + b"\0" + p.read_bytes())

@@ -2,6 +2,7 @@
 
 import os
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -81,3 +82,65 @@ def running_as(uids) -> list:
 def processes_of():
     """``running_as`` for a test: ``processes_of({uid, ...})`` -> [(pid, command line start)]."""
     return running_as
+
+
+def _parent(pid) -> int:
+    try:
+        return int(Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1])
+    except (OSError, IndexError, ValueError):
+        return 0
+
+
+def _descends_from(pid, ancestor: int) -> bool:
+    """Whether process ``pid`` is ``ancestor`` or runs under it (its parents, read from /proc)."""
+    pid, seen = int(pid), set()
+    while pid > 1 and pid not in seen:
+        if pid == ancestor:
+            return True
+        seen.add(pid)
+        pid = _parent(pid)
+    return False
+
+
+def leftovers_of(uids, settle: float = 10.0) -> list:
+    """(pid, the start of its command line) of every process left running as one of ``uids``, the
+    uids a grading run of this test leased and has given back (``sandbox.recording_leases``).
+
+    Another grading run on this host (a second section, a regrade) may lease the same uids once
+    this run is done, and its kernels then rightly run as them; those are not this run's
+    leftovers. So, uid by uid, as ``allocate_uid`` decides what a uid's processes are: where no
+    grading task holds the uid's lock (this check takes it, so none can lease it meanwhile),
+    every process of the uid is a leftover; where a task holds it, every process of the uid that
+    does not run under that task's process (the pid its lock file names) is one. A process is
+    reported only if it is still there after ``settle`` seconds of looking again (the other run's
+    own clean-up may orphan its processes for a moment before it kills them)."""
+    import fcntl
+
+    from autograde import sandbox
+
+    folder = sandbox.uid_lock_dir()
+    deadline = time.monotonic() + settle
+    while True:
+        found = []
+        for uid in sorted(set(uids)):
+            fd = os.open(folder / f"{uid}.lock", os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o600)
+            try:
+                try:
+                    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                    holder = None                     # nobody's now: nothing may run as it
+                except BlockingIOError:
+                    text = os.pread(fd, 32, 0).decode(errors="replace").strip()
+                    holder = int(text) if text.isdigit() else 0     # 0: its holder has not said who yet
+                found += [(pid, cmd) for pid, cmd in running_as({uid})
+                          if holder is None or not _descends_from(pid, holder)]
+            finally:
+                os.close(fd)                          # drops the lock if this check took it
+        if not found or time.monotonic() > deadline:
+            return found
+        time.sleep(0.25)
+
+
+@pytest.fixture
+def leftovers():
+    """``leftovers_of`` for a test: ``leftovers(uids)`` -> [(pid, command line start)]."""
+    return leftovers_of

@@ -23,8 +23,8 @@ import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 
-from autograde import gradescope, sandbox
-from autograde.course import NOTEBOOKS
+from autograde import grade, gradescope, sandbox
+from autograde.course import GRADING_SOURCE, NOTEBOOKS
 
 VISIBILITY = ["hidden", "after_due_date", "after_published", "visible"]
 FORMATS = ["text", "html", "simple_format", "md", "ansi"]
@@ -74,19 +74,108 @@ def test_the_zip_is_laid_out_as_gradescope_asks(bundle):
     # the package at the commit built: the working tree's own bytes, and what grading reads beside them
     head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
     assert config["commit"] == head and config["timeout"] == 120 and config["visibility"] == "visible"
+    assert config["confine"] == "require"                   # the default: nothing graded without a sandbox
     for rel, data in course.items():
-        assert (ROOT / rel).read_bytes() == data, rel
-    need = {"pyproject.toml", "course.yaml", "requirements.txt", "autograde/gradescope.py", "autograde/nbgrader_config.py",
-            "autograde/mark_scheme.yaml", "pusht/__init__.py", "pusht/grading.py", "pusht/nb/times.json"}
-    need |= {f"solutions/{n}" for n in NOTEBOOKS}
+        if rel != "pyproject.toml" and not rel.startswith(f"{GRADING_SOURCE}/"):       # those two are made
+            assert (ROOT / rel).read_bytes() == data, rel
+    need = {"pyproject.toml", "course.yaml", "autograde/gradescope.py", "autograde/grade.py", "autograde/checks.py",
+            "autograde/probe.py", "autograde/nbgrader_config.py", "autograde/lms_export.py", "autograde/class_report.py",
+            "pusht/__init__.py", "pusht/grading.py", "pusht/zygote.py", "pusht/nb/times.json"}
+    need |= {f"{GRADING_SOURCE}/{n}" for n in NOTEBOOKS}
     assert need <= set(course), need - set(course)
+    assert set(course) >= {f"autograde/{p.name}" for p in (ROOT / "autograde").glob("*.py")} - \
+        {"autograde/manual_grade.py", "autograde/dask_preload.py"}
+    assert set(course) >= {p.relative_to(ROOT).as_posix() for p in (ROOT / "pusht").rglob("*.py")}
+    # only what grading needs: no solutions, no test classes, no site builder, no tests, no mark scheme
+    unneeded = ("solutions/", "autograde/classes/", "chapter_site/", "tests/", "scripts/", "notebooks/", "text/",
+                "benchmarks/", "README.md", "requirements.txt", "autograde/mark_scheme.yaml",
+                "autograde/manual_grade.py", "autograde/dask_preload.py")
+    assert not [n for n in infos if n.startswith(unneeded) or n.startswith(tuple(f"course/{u}" for u in unneeded))]
     assert not [n for n in course if "__pycache__" in n or n.endswith((".pyc", ".db")) or n.startswith("autograde/source/")]
+    assert 'packages = ["pusht", "pusht.nb", "autograde"]' in course["pyproject.toml"].decode()
     # torch's CPU build at requirements.txt's pin, the rest of what grading needs with requirements.txt's pins
     assert "--index-url https://download.pytorch.org/whl/cpu \"torch==2.13.0\"" in setup
     assert "torch==2.13.0" in (ROOT / "requirements.txt").read_text()
     pins = dict(line.split("==") for line in requirements.splitlines() if line and not line.startswith("#"))
     assert set(pins) == set(gradescope.GRADING_PACKAGES) and pins["nbgrader"] == "0.9.6" and pins["nh3"] == "0.3.8"
     assert "apt-get install" in setup and "bubblewrap" in setup and "pip install -q --no-deps -e \"$COURSE\"" in setup
+    assert setup.rstrip().endswith('-m autograde.gradescope check --config "$SRC/gradescope.json"')
+
+
+def test_the_bundle_holds_no_solution_and_every_hidden_test(bundle, tmp_path):
+    """The bundle's notebooks are the instructor's with every solution taken out: no line of a solution
+    region, no one-sentence answer, no output; the hidden tests, which the gradebook must hold, all kept,
+    and blanked from whatever the bundle's grader writes."""
+    solution, hidden = _solution_and_hidden_lines()
+    assert len(solution) > 30 and len(hidden) >= 5, (len(solution), len(hidden))
+    with zipfile.ZipFile(bundle) as zf:
+        notebooks = {n: zf.read(n).decode() for n in zf.namelist() if n.startswith(f"course/{GRADING_SOURCE}/")}
+        everything = b"\n".join(zf.read(n) for n in zf.namelist() if not n.startswith("course/pusht/"))
+    assert sorted(n.rsplit("/", 1)[1] for n in notebooks) == NOTEBOOKS
+    cells = [c for text in notebooks.values() for c in nbformat.reads(text, as_version=4).cells]
+    text = "\n".join(c.source for c in cells)
+    assert not [line for line in solution if line in text]
+    # nor anywhere else in the zip (but the students' package, which holds its own implementation of
+    # every exercise: that is how the chapter runs, and it is public)
+    assert not [line for line in solution if line.encode() in everything]
+    assert all(line in text for line in hidden)
+    assert not [c for c in cells if c.cell_type == "code" and (c.outputs or c.execution_count)]
+    sentences = [c for c in cells if c.cell_type == "markdown" and c.metadata.get("nbgrader", {}).get("solution")]
+    assert sentences and all(c.source == "" for c in sentences)
+    for name, text in notebooks.items():
+        (tmp_path / name.rsplit("/", 1)[1]).write_text(text)
+    assert set(hidden) <= set(gradescope.secret_lines(tmp_path))
+
+
+def test_the_bundles_pyproject_installs_what_it_carries(bundle, tmp_path):
+    with zipfile.ZipFile(bundle) as zf:
+        zf.extractall(tmp_path, [n for n in zf.namelist() if n.startswith("course/")])
+    built = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
+                            "-w", str(tmp_path / "wheel"), str(tmp_path / "course")], capture_output=True, text=True)
+    assert built.returncode == 0, built.stdout[-2000:] + built.stderr[-2000:]
+    wheel, = (tmp_path / "wheel").glob("*.whl")
+    with zipfile.ZipFile(wheel) as zf:
+        tops = {n.split("/")[0] for n in zf.namelist() if not n.split("/")[0].endswith(".dist-info")}
+    assert tops == {"pusht", "autograde"}
+
+
+def test_the_bundles_notebooks_strip_only_solutions():
+    nb = nbformat.v4.new_notebook()
+    nb.metadata["kernelspec"] = {"name": "python3", "language": "python", "display_name": "Python 3"}
+    nb.cells = [
+        nbformat.v4.new_code_cell("def f(x):\n    ### BEGIN SOLUTION\n    return x + 1\n    ### END SOLUTION\n",
+                                  metadata={"nbgrader": {"solution": True, "grade": False, "grade_id": "f",
+                                                         "locked": False, "schema_version": 3}}),
+        nbformat.v4.new_markdown_cell("The model forgets.", metadata={"nbgrader": {
+            "solution": True, "grade": True, "grade_id": "s", "points": 1, "locked": False, "schema_version": 3}}),
+        nbformat.v4.new_code_cell("assert f(1) == 2\n### BEGIN HIDDEN TESTS\nassert f(2) == 3\n### END HIDDEN TESTS",
+                                  metadata={"nbgrader": {"solution": False, "grade": True, "grade_id": "t",
+                                                         "points": 2, "locked": True, "schema_version": 3}}),
+        nbformat.v4.new_code_cell("print(f(1))", execution_count=3,
+                                  outputs=[nbformat.v4.new_output("stream", text="2\n")]),
+    ]
+    out = nbformat.reads(gradescope.grading_source(nbformat.writes(nb)), as_version=4)
+    assert out.cells[0].source == "def f(x):\n    ### BEGIN SOLUTION\n    ### END SOLUTION\n"
+    assert out.cells[1].source == ""
+    assert out.cells[2].source == nb.cells[2].source and out.cells[3].source == "print(f(1))"
+    assert out.cells[3].outputs == [] and out.cells[3].execution_count is None
+    assert [c.id for c in out.cells] == [c.id for c in nb.cells] and out.cells[2].metadata == nb.cells[2].metadata
+    unended = nbformat.v4.new_code_cell("### BEGIN SOLUTION\nx = 1")
+    with pytest.raises(ValueError, match="without its end"):
+        gradescope.grading_source(nbformat.writes(nbformat.v4.new_notebook(cells=[unended])))
+
+
+def test_a_bundle_whose_notebooks_nbgrader_reads_differently_is_not_built():
+    """``same_assignment`` (each build runs it): a grading source that loses a hidden test, or keeps a
+    solution line outside its region, is refused."""
+    solutions = sorted((ROOT / "solutions").glob("*.ipynb"))
+    source = {p.name: gradescope.grading_source(p.read_text()) for p in solutions}
+    gradescope.same_assignment(solutions, source)
+    nb = nbformat.reads(source["02_reward.ipynb"], as_version=4)
+    cell = next(c for c in nb.cells if "BEGIN HIDDEN TESTS" in c.source)
+    cell.source = cell.source.replace("grading.submit", "grading.submitted")
+    with pytest.raises(ValueError, match="gradebook 02_reward"):
+        gradescope.same_assignment(solutions, {**source, "02_reward.ipynb": nbformat.writes(nb)})
 
 
 def test_the_same_tree_builds_the_same_zip(bundle, tmp_path):
@@ -98,7 +187,19 @@ def test_the_same_tree_builds_the_same_zip(bundle, tmp_path):
 def test_make_gradescope_builds_the_bundle():
     dry = subprocess.run(["make", "-n", "gradescope", "OUT=x.zip"], cwd=ROOT, capture_output=True, text=True)
     assert dry.returncode == 0, dry.stderr
-    assert '-m autograde.gradescope build "x.zip"' in dry.stdout
+    assert '-m autograde.gradescope build "x.zip" --confine "require"' in dry.stdout
+    dry = subprocess.run(["make", "-n", "gradescope", "CONFINE=allow"], cwd=ROOT, capture_output=True, text=True)
+    assert '-m autograde.gradescope build "runs/gradescope/autograder.zip" --confine "allow"' in dry.stdout
+
+
+def test_an_unconfined_bundle_is_built_only_when_asked_and_says_so(tmp_path, capsys):
+    assert gradescope.main(["build", str(tmp_path / "allow.zip"), "--confine", "allow"]) == 0
+    err = capsys.readouterr().err
+    assert "WARNING: this bundle grades UNCONFINED" in err and "--confine require" in err
+    with zipfile.ZipFile(tmp_path / "allow.zip") as zf:
+        assert json.loads(zf.read(gradescope.CONFIG))["confine"] == "allow"
+    with pytest.raises(SystemExit):
+        gradescope.main(["build", str(tmp_path / "auto.zip"), "--confine", "auto"])
 
 
 # --- an emulated /autograder -----------------------------------------------------------------------
@@ -186,7 +287,7 @@ def _cells():
     return [(c["notebook"][:-len(".ipynb")], c["grade_id"], c["points"]) for c in gradescope.graded_cells()]
 
 
-def test_the_instructors_solutions_score_full_marks(full_marks):
+def test_the_instructors_solutions_score_full_marks(full_marks, container):
     results, stdout, _ = full_marks
     _check_schema(results)
     assert results["score"] == AUTOMATIC, results["output"]
@@ -204,6 +305,7 @@ def test_the_instructors_solutions_score_full_marks(full_marks):
     if sandbox.available()[0]:
         assert "confinement: bubblewrap sandboxes" in stdout
     assert "/source/course/autograde" in stdout        # the bundle's copy graded, not the working tree's
+    assert f"the assignment from {container.root}/source/course/{GRADING_SOURCE}" in stdout      # no solutions/
 
 
 def test_the_unchanged_release_scores_zero_on_every_automatic_test(release_hand_in):
@@ -240,6 +342,28 @@ def _secret_lines() -> list[str]:
     scheme = yaml.safe_load((ROOT / "autograde" / "mark_scheme.yaml").read_text())
     lines += [s.strip() for text in scheme.values() for s in text.split(". ") if len(s.strip()) >= 20]
     return lines
+
+
+def _solution_and_hidden_lines() -> tuple[list[str], list[str]]:
+    """(the lines of the instructor's solutions the release does not show anywhere: solution regions and
+    solution cells without regions; the lines of the hidden-test regions), stripped, 8 characters or longer."""
+    release = "\n".join(c.source for n in NOTEBOOKS for c in nbformat.read(ROOT / "notebooks" / n, as_version=4).cells)
+    solution, hidden = [], []
+    for n in NOTEBOOKS:
+        for cell in nbformat.read(ROOT / "solutions" / n, as_version=4).cells:
+            inside = None
+            if cell.metadata.get("nbgrader", {}).get("solution") and "BEGIN SOLUTION" not in cell.source:
+                solution += cell.source.splitlines()
+                continue
+            for line in cell.source.splitlines():
+                if "BEGIN SOLUTION" in line or "BEGIN HIDDEN TESTS" in line:
+                    inside = solution if "SOLUTION" in line else hidden
+                elif "END SOLUTION" in line or "END HIDDEN TESTS" in line:
+                    inside = None
+                elif inside is not None:
+                    inside.append(line)
+    keep = lambda lines: sorted({l.strip() for l in lines if len(l.strip()) >= 8 and l.strip() not in release})  # noqa: E731
+    return keep(solution), keep(hidden)
 
 
 def test_nothing_hidden_reaches_results_or_stdout(full_marks, release_hand_in):
@@ -319,3 +443,74 @@ def test_jobs_follow_the_environment_then_the_cpu_quota(monkeypatch):
     assert gradescope.jobs() == 3
     monkeypatch.delenv(gradescope.JOBS_ENV)
     assert 1 <= gradescope.jobs() <= (os.cpu_count() or 1)
+
+
+def test_a_bundle_without_settings_requires_confinement(tmp_path, monkeypatch):
+    root = tmp_path / "autograder"
+    (root / "submission").mkdir(parents=True)
+    (root / "submission" / "02_reward.ipynb").write_bytes((ROOT / "notebooks" / "02_reward.ipynb").read_bytes())
+    monkeypatch.setattr(sandbox, "available", lambda: (False, "no namespaces in this container"))
+    monkeypatch.setattr(grade, "grade_class", lambda *a, **k: pytest.fail("graded without a sandbox"))
+    results = gradescope.run(root, log=lambda line: None)
+    assert results["score"] == 0 and not results["tests"] and "could not start its sandbox" in results["output"]
+
+
+def _allow_bundle(tmp_path, monkeypatch, available, notebooks=("02_reward.ipynb",)):
+    """An emulated /autograder of a --confine allow bundle, grading faked (only what run adds is checked)."""
+    root = tmp_path / "autograder"
+    (root / "source").mkdir(parents=True)
+    (root / "submission").mkdir()
+    (root / "source" / gradescope.CONFIG).write_text(json.dumps({"confine": "allow"}))
+    for n in notebooks:
+        (root / "submission" / n).write_bytes((ROOT / "notebooks" / n).read_bytes())
+    monkeypatch.setattr(sandbox, "available", lambda: available)
+    graded = []
+
+    def fake_grade_class(hand_in, course, **kwargs):
+        graded.append(kwargs["confine"])
+        return {gradescope.STUDENT: {"notes": [], "verdicts": {}, "completion": {}}}
+    monkeypatch.setattr(grade, "grade_class", fake_grade_class)
+    monkeypatch.setattr(gradescope, "_scores", lambda course: {})
+    lines = []
+    results = gradescope.run(root, log=lines.append)
+    assert results == json.loads((root / "results" / "results.json").read_text())
+    _check_schema(results)
+    return results, lines, graded
+
+
+def test_an_unconfined_bundle_warns_in_every_result_where_no_sandbox_starts(tmp_path, monkeypatch):
+    results, lines, graded = _allow_bundle(tmp_path, monkeypatch, (False, "bwrap: Unknown option --size"))
+    assert graded == [False]                               # graded, unconfined, as this bundle allows
+    first = results["tests"][0]
+    assert first["name"] == gradescope.SANDBOX_TEST and first["output"] == gradescope.UNCONFINED_NOTE
+    assert (first["score"], first["max_score"], first["status"], first["visibility"]) == (0, 0, "failed", "visible")
+    assert results["output"].startswith("WARNING: your notebooks were graded WITHOUT a sandbox")
+    assert any("WARNING" in line and "allows grading without one" in line for line in lines)
+    # a submission with no notebook in it is told too
+    shutil.rmtree(tmp_path / "autograder")
+    results, _, graded = _allow_bundle(tmp_path, monkeypatch, (False, "no bwrap"), notebooks=())
+    assert not graded and results["tests"][0]["output"] == gradescope.UNCONFINED_NOTE
+
+
+def test_an_unconfined_bundle_says_so_where_a_sandbox_starts_too(tmp_path, monkeypatch):
+    results, _, graded = _allow_bundle(tmp_path, monkeypatch, (True, ""))
+    assert graded == [True]
+    first = results["tests"][0]
+    assert first["name"] == gradescope.SANDBOX_TEST and first["output"] == gradescope.CONFINED_NOTE
+    assert first["status"] == "passed" and not results["output"].startswith("WARNING")
+    # the results.json written first, in case grading never finishes, warns as well
+    unfinished = gradescope._unfinished({"confine": "allow"})
+    assert unfinished["tests"][0]["output"] == gradescope.UNKNOWN_NOTE and unfinished["output"].startswith("WARNING")
+    assert not gradescope._unfinished({"confine": "require"})["tests"]
+
+
+@pytest.mark.parametrize("confine, version, ok", [("require", (0, 6, 1), False), ("require", None, False),
+                                                  ("require", (0, 9, 0), True), ("allow", (0, 6, 1), True)])
+def test_setup_fails_the_image_build_only_where_required_confinement_never_can_be(monkeypatch, confine, version, ok):
+    monkeypatch.setattr(sandbox, "available", lambda: (False, "bwrap refused to start a sandbox here"))
+    monkeypatch.setattr(gradescope, "bwrap_version", lambda: version)
+    lines = []
+    assert gradescope.check({"confine": confine}, log=lines.append) is ok
+    assert ("ERROR" in lines[-1] and "Ubuntu 24.04" in lines[-1]) if not ok else "WARNING" in lines[-1]
+    monkeypatch.setattr(sandbox, "available", lambda: (True, ""))
+    assert gradescope.check({"confine": confine}, log=lines.append)

@@ -317,6 +317,63 @@ def test_a_process_of_the_same_uid_outside_the_sandbox_survives_its_clean_up(tmp
             outsider.wait()
 
 
+@ROOT_ONLY
+def test_a_run_records_the_uids_it_leased_and_no_others():
+    held = sandbox.allocate_uid()                     # leased before recording: not this run's
+    try:
+        with sandbox.recording_leases() as leased:
+            got = []
+            threads = [threading.Thread(target=lambda: got.append(sandbox.allocate_uid())) for _ in range(3)]
+            for t in threads:
+                t.start()
+            for t in threads:
+                t.join()
+        after = sandbox.allocate_uid()                # after recording: not this run's either
+        assert sorted(leased) == sorted(lease.uid for lease in got) and held.uid not in leased
+        assert after.uid not in leased
+        for lease in got + [after]:
+            lease.close()
+    finally:
+        held.close()
+
+
+@ROOT_ONLY
+def test_a_runs_leftovers_are_its_own_uids_processes_that_no_holder_accounts_for(leftovers):
+    """conftest.leftovers_of, which test_grading_hostile's leftovers check uses: a process of a uid the
+    run leased is a leftover unless a grading task that holds the uid now runs it (another run on this
+    host that leased the uid once this run gave it back)."""
+    lease = sandbox.allocate_uid()                    # another run's task holds the uid (this process)
+    uid = lease.uid
+    theirs = run_as(uid, "sleep", "60")              # that task's kernel: a child of the holder
+    orphan = None
+    try:
+        assert leftovers([uid], settle=0) == []
+        # a process of the uid that left its task (reparented away from the holder): a leftover
+        subprocess.run(["setsid", "-f", "setpriv", f"--reuid={uid}", f"--regid={uid}", "--clear-groups", "--",
+                        "sleep", "61"], check=True)
+        deadline = time.monotonic() + 10
+        while orphan is None and time.monotonic() < deadline:
+            orphan = next((int(p) for p, cmd in running_as({uid}) if cmd.startswith(b"sleep\x0061")), None)
+            time.sleep(0.01)
+        assert orphan and [int(p) for p, _ in leftovers([uid], settle=0)] == [orphan]
+        os.kill(orphan, signal.SIGKILL)
+        deadline = time.monotonic() + 10
+        while leftovers([uid], settle=0) and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert leftovers([uid], settle=0) == []
+        lease.close()                                 # now nobody holds it: whatever runs as it is left over
+        assert [int(p) for p, _ in leftovers([uid], settle=0)] == [theirs.pid]
+    finally:
+        lease.close()
+        theirs.kill()
+        theirs.wait()
+        if orphan:
+            try:
+                os.kill(orphan, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+
+
 @BWRAP
 def test_a_sandbox_stopped_at_any_moment_of_its_start_leaves_nothing(tmp_path):
     os.chmod(tmp_path, 0o755)
