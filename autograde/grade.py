@@ -41,7 +41,7 @@ from pathlib import Path
 
 import nbformat
 
-from . import intake, sandbox
+from . import guarantees, intake, sandbox
 from .class_report import write_class_report
 from .course import ASSIGNMENT, COURSE_ID, HERE, NOTEBOOKS, _one_run_per_course, course_bundle, prepare_course
 from .feedback import generate_feedback, sanitize_feedback_sources
@@ -89,6 +89,9 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
                f"student code runs as you, with your files in reach. Install bubblewrap to confine it.")
         log(msg)
         warnings.warn(msg)
+    held = guarantees.of_run(confine, why, limits, scheduler)   # which protections hold here, said first
+    for line in guarantees.lines(held):
+        log(line)
     prepare_course(course)
     shutil.copy(course / "gradebook.db", course / "gradebook.template.db")
     got = intake.collect(submissions, NOTEBOOKS)
@@ -182,12 +185,12 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
     for s in report:                   # nbgrader's autograde of this student's notebooks, kernels included
         times = [r["seconds"] for r in results.get(s, {}).values() if isinstance(r, dict) and "seconds" in r]
         report[s]["seconds"] = round(sum(times), 2) if times else None
-    export(course, report, got.rejected)
+    export(course, report, got.rejected, held)
     phases["grades.csv, report.csv"], t = time.perf_counter() - t, time.perf_counter()
     write_lms_exports(course, report, log=log)
     phases["LMS import files"], t = time.perf_counter() - t, time.perf_counter()
     try:
-        write_class_report(course, report, submitted=prepared)
+        write_class_report(course, report, submitted=prepared, guarantees=held)
     except Exception as e:  # noqa: BLE001 - the report must never cost the grades
         log(f"WARNING: no class report ({type(e).__name__}: {e})")
     phases["class report"] = time.perf_counter() - t

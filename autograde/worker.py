@@ -62,6 +62,13 @@ def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | Non
     config.Execute.shutdown_kernel = "immediate"
     config.Execute.kernel_manager_class = GradingKernelManager    # notices the killed kernel within 10 ms
     config.KernelManager.transport = "ipc"
+    # the graded copy's outputs cut to a size its feedback page can be made from, with a note where cut,
+    # after SaveAutoGrades has scored them (outputs.py)
+    from nbgrader.converters import Autograde
+    from .outputs import CapOutput
+    steps = config.Autograde.get("autograde_preprocessors") or \
+        Autograde.class_traits()["autograde_preprocessors"].make_dynamic_default()
+    config.Autograde.autograde_preprocessors = [*steps, CapOutput]
     config.KernelManager.ip = str(sockets / "k")
     zygote = None
     if confine:
