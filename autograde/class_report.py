@@ -6,6 +6,8 @@
 PNGs made with matplotlib and embedded as ``data:`` URLs; nothing is fetched, no script runs: the
 first element of its ``<head>`` is a Content-Security-Policy that allows none) and shows:
 
+* first, the run's guarantees (``guarantees``, where ``grade_class`` passes them): which of the
+  sandbox's protections held, and what a student's code could do where one did not;
 * the score distribution: students per total score (nbgrader's score of each student's submission in
   ``gradebook.db``, manual grades included; a student of the report without a submission scores 0,
   as in ``report.csv``);

@@ -1,12 +1,13 @@
-"""The graded copy of a notebook, kept to a size its feedback page can always be made from.
+"""The graded copy of a notebook, kept to a size its feedback page can always be made from; and a
+page all the same where there is no graded copy to make it from. Never no page for a graded notebook.
 
 A student's cell may print any amount (``bigout`` prints a 25 MB line, ``flood`` prints until the
 cell timeout). nbgrader writes every byte of it into the autograded notebook, and a copy too large
 to read back (``task.MAX_NOTEBOOK_BYTES``) used to leave the student with no feedback page at all.
-``CapOutput`` is the last step of nbgrader's autograde in the worker (``worker.py`` appends it to
-``Autograde.autograde_preprocessors``), so it runs after ``SaveAutoGrades`` has put the scores in
-the gradebook: the scores are those of every output, and only what is written to the graded copy,
-and so shown on the page, is cut. What is cut says so where it was, on the page:
+``CapOutput`` is the last step of nbgrader's autograde in the worker (``autograde_steps``), so it
+runs after ``SaveAutoGrades`` has put the scores in the gradebook: the scores are those of every
+output, and only what is written to the graded copy, and so shown on the page, is cut. What is cut
+says so where it was, on the page:
 
     [output truncated: 38.0 MB of output not shown]
 
@@ -16,14 +17,19 @@ output over it is left out whole), all of a notebook's outputs together ``NOTEBO
 the budget): the student sees what raised. A chapter notebook's outputs while grading are well under
 1 MB, so an honest notebook's graded copy is never cut. The feedback page cuts further
 (``feedback.FEEDBACK_OUTPUT_CHARS``, ``FEEDBACK_NOTEBOOK_CHARS``).
+
+Where no graded copy can be read (a hand-in whose own cells make it larger than the grader reads
+back), or nbgrader made none (it could not finish the notebook: output that kept coming after the
+cell's time ran out, a kernel that died), ``stand_in`` makes the page from the notebook as handed in,
+without outputs, under a first cell that says why; the scores on it are the gradebook's.
 """
 
 from __future__ import annotations
 
 import json
+from functools import lru_cache
 
 from nbformat import v4
-from nbgrader.preprocessors import NbGraderPreprocessor
 
 OUTPUT_BYTES = 2 << 20             # one output in the graded copy (the page shows 20,000 characters of it)
 NOTEBOOK_OUTPUT_BYTES = 8 << 20    # all outputs of one graded notebook together
@@ -89,15 +95,40 @@ def cap_cell(cell, left: int) -> int:
     return left
 
 
-class CapOutput(NbGraderPreprocessor):
-    """nbgrader's last autograde step here: the graded copy's outputs cut (``cap_cell``), with notes."""
+@lru_cache(maxsize=1)
+def _cap_output():
+    # made on first use: nbgrader's preprocessors take seconds to import, and only the worker needs them
+    from nbgrader.preprocessors import NbGraderPreprocessor
 
-    def preprocess(self, nb, resources):
-        left = NOTEBOOK_OUTPUT_BYTES
-        for cell in nb.cells:
-            if cell.cell_type == "code" and cell.get("outputs"):
-                left = cap_cell(cell, left)
-        return nb, resources
+    class CapOutput(NbGraderPreprocessor):
+        """nbgrader's last autograde step here: the graded copy's outputs cut (``cap_cell``), with notes."""
+
+        def preprocess(self, nb, resources):
+            left = NOTEBOOK_OUTPUT_BYTES
+            for cell in nb.cells:
+                if cell.cell_type == "code" and cell.get("outputs"):
+                    left = cap_cell(cell, left)
+            return nb, resources
+
+    CapOutput.__module__, CapOutput.__qualname__ = __name__, "CapOutput"
+    return CapOutput
+
+
+def __getattr__(name):          # outputs.CapOutput, made on first use
+    if name == "CapOutput":
+        return _cap_output()
+    raise AttributeError(name)
+
+
+def autograde_steps(config=None) -> list:
+    """nbgrader autograde's steps (``Autograde.autograde_preprocessors``, as ``config`` sets them or
+    nbgrader's own), with ``CapOutput`` last: after ``SaveAutoGrades`` has scored every output."""
+    from nbgrader.converters import Autograde
+
+    steps = (config.Autograde.get("autograde_preprocessors") if config is not None else None) or \
+        Autograde.class_traits()["autograde_preprocessors"].make_dynamic_default()
+    cap = _cap_output()
+    return [s for s in steps if s is not cap] + [cap]
 
 
 STAND_IN_NOTE = ("**{why}** This page shows your notebook as you handed it in, without its outputs{left}. "

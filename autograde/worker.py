@@ -17,6 +17,7 @@ import time
 from pathlib import Path
 
 from . import sandbox
+from .outputs import autograde_steps
 from .course import ASSIGNMENT, COURSE_ID, _last_error
 
 
@@ -64,11 +65,7 @@ def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | Non
     config.KernelManager.transport = "ipc"
     # the graded copy's outputs cut to a size its feedback page can be made from, with a note where cut,
     # after SaveAutoGrades has scored them (outputs.py)
-    from nbgrader.converters import Autograde
-    from .outputs import CapOutput
-    steps = config.Autograde.get("autograde_preprocessors") or \
-        Autograde.class_traits()["autograde_preprocessors"].make_dynamic_default()
-    config.Autograde.autograde_preprocessors = [*steps, CapOutput]
+    config.Autograde.autograde_preprocessors = autograde_steps(config)
     config.KernelManager.ip = str(sockets / "k")
     zygote = None
     if confine:
