@@ -72,7 +72,9 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
     (by default their recorded results are reused).
 
     The whole run holds the course folder (``course_lock``): a second run on the same folder
-    waits for this one, and says whose run it waits for.
+    waits for this one, and says whose run it waits for. It first says which of the sandbox's
+    guarantees hold here (``guarantees.of_run``: logged, then the first rows of ``report.csv`` and
+    the first section of the class report).
     """
     from nbgrader.api import Gradebook
     from tqdm.auto import tqdm
