@@ -125,8 +125,11 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
     for s in students:
         old = state.get(s, {})
         folder = course / "autograded" / s / ASSIGNMENT
+        # a notebook nbgrader could not finish has a stand-in page (outputs.stand_in), not a graded
+        # copy: it is graded again, as before there was a page for it
         if not regrade and old.get("fingerprint") == prints[s] and \
-                all((folder / n).is_file() for n in old.get("results", {})):
+                all((folder / n).is_file() and (not isinstance(r, dict) or r.get("ok", True))
+                    for n, r in old.get("results", {}).items()):
             results[s] = old["results"]
     if results:
         log(f"{len(results)} of {len(students)} students unchanged since the last grading: their results "

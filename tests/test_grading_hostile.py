@@ -269,3 +269,7 @@ def test_without_a_sandbox_grading_runs_and_warns(tmp_path, monkeypatch):
     with pytest.warns(UserWarning, match="NOT confined"):
         grade.grade_class(tmp_path / "empty.zip", course, log=lines.append)
     assert any("NOT confined" in line and "bubblewrap is not installed" in line for line in lines)
+    # and its guarantees, first, say that none held (autograde/guarantees.py)
+    assert any(line.startswith("guarantees of this run: 5 of 5 NOT held") for line in lines)
+    run = [r["notes"] for r in csv.DictReader(open(course / "report.csv", newline="")) if r["student_id"] == "(this run)"]
+    assert len(run) == 5 and all(": NOT HELD: " in n for n in run) and "hidden tests" in run[0]
