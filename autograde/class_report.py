@@ -6,6 +6,8 @@
 PNGs made with matplotlib and embedded as ``data:`` URLs; nothing is fetched, no script runs: the
 first element of its ``<head>`` is a Content-Security-Policy that allows none) and shows:
 
+* first, the run's guarantees (``guarantees``, where ``grade_class`` passes them): which of the
+  sandbox's protections held, and what a student's code could do where one did not;
 * the score distribution: students per total score (nbgrader's score of each student's submission in
   ``gradebook.db``, manual grades included; a student of the report without a submission scores 0,
   as in ``report.csv``);
@@ -724,17 +726,39 @@ def render(d: dict, title: str) -> str:
             f'<h1>{_t(title)}</h1><p class="muted">{d["students"]} students; made {now} by '
             f'<code>autograde/class_report.py</code> from the gradebook and the notebooks as handed in. It holds '
             f'no student code and no hidden test.</p><nav>{nav}</nav>\n'
+            + _guarantees_section(d.get("guarantees"))
             + _glance(d) + _score_section(d) + _cells_section(d) + _predictions_section(d) + _receipts_section(d)
             + _flags_section(d) + _time_section(d) + "\n</body>\n</html>\n")
 
 
-def write_class_report(course: Path, report: dict, submitted: dict | None = None, out: Path | None = None) -> Path:
+def _guarantees_section(held) -> str:
+    """The run's guarantees (``guarantees.of_run``), above everything else: which held, and for those
+    that did not, why and what a student's code could do there. Nothing where the run gave none."""
+    if not held:
+        return ""
+    off = [g for g in held if not g.held]
+    rows = "".join(f'<tr><td>{_t(g.name)}</td><td>{"held" if g.held else "<strong>NOT held</strong>"}</td>'
+                   f'<td>{_t(g.detail, 2000)}</td></tr>' for g in held)
+    return (f'<section id="guarantees"><h2>Guarantees of this run</h2><p>'
+            + ("All of the sandbox\'s guarantees held." if not off else
+               f'<strong>{len(off)} of {len(held)} did not hold</strong> ({_t(", ".join(g.name for g in off))}): '
+               f'read what a student\'s code could do there.')
+            + ' They are also the first lines of the run\'s output and of <code>report.csv</code>.</p>'
+              f'<table class="wide"><tr><th>guarantee</th><th></th><th>what holds, or why not and what a student '
+              f'could do</th></tr>{rows}</table></section>')
+
+
+def write_class_report(course: Path, report: dict, submitted: dict | None = None, out: Path | None = None,
+                       guarantees: list | None = None) -> Path:
     """Write ``<course>/class_report.html`` (or ``out``) for the per-student ``report`` of
     ``grade_class``; returns its path. ``submitted``: the notebooks as handed in, {student: {file
-    name: notebook}} (default: nbgrader's ``<course>/submitted/`` folders, where they exist)."""
+    name: notebook}} (default: nbgrader's ``<course>/submitted/`` folders, where they exist).
+    ``guarantees``: the run's (``guarantees.of_run``), shown first."""
     course = Path(course)
     out = Path(out) if out else course / REPORT_FILE
-    page = render(gather(course, report, submitted), f"Class report: {ASSIGNMENT}")
+    d = gather(course, report, submitted)
+    d["guarantees"] = guarantees
+    page = render(d, f"Class report: {ASSIGNMENT}")
     tmp = out.with_name(out.name + ".tmp")
     tmp.write_text(page, encoding="utf-8")
     os.replace(tmp, out)

@@ -41,7 +41,7 @@ from pathlib import Path
 
 import nbformat
 
-from . import intake, sandbox
+from . import guarantees, intake, sandbox
 from .class_report import write_class_report
 from .course import ASSIGNMENT, COURSE_ID, HERE, NOTEBOOKS, _one_run_per_course, course_bundle, prepare_course
 from .feedback import generate_feedback, sanitize_feedback_sources
@@ -72,7 +72,9 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
     (by default their recorded results are reused).
 
     The whole run holds the course folder (``course_lock``): a second run on the same folder
-    waits for this one, and says whose run it waits for.
+    waits for this one, and says whose run it waits for. It first says which of the sandbox's
+    guarantees hold here (``guarantees.of_run``: logged, then the first rows of ``report.csv`` and
+    the first section of the class report).
     """
     from nbgrader.api import Gradebook
     from tqdm.auto import tqdm
@@ -89,6 +91,9 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
                f"student code runs as you, with your files in reach. Install bubblewrap to confine it.")
         log(msg)
         warnings.warn(msg)
+    held = guarantees.of_run(confine, why, limits, scheduler)   # which protections hold here, said first
+    for line in guarantees.lines(held):
+        log(line)
     prepare_course(course)
     shutil.copy(course / "gradebook.db", course / "gradebook.template.db")
     got = intake.collect(submissions, NOTEBOOKS)
@@ -120,8 +125,11 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
     for s in students:
         old = state.get(s, {})
         folder = course / "autograded" / s / ASSIGNMENT
+        # a notebook nbgrader could not finish has a stand-in page (outputs.stand_in), not a graded
+        # copy: it is graded again, as before there was a page for it
         if not regrade and old.get("fingerprint") == prints[s] and \
-                all((folder / n).is_file() for n in old.get("results", {})):
+                all((folder / n).is_file() and (not isinstance(r, dict) or r.get("ok", True))
+                    for n, r in old.get("results", {}).items()):
             results[s] = old["results"]
     if results:
         log(f"{len(results)} of {len(students)} students unchanged since the last grading: their results "
@@ -182,12 +190,12 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
     for s in report:                   # nbgrader's autograde of this student's notebooks, kernels included
         times = [r["seconds"] for r in results.get(s, {}).values() if isinstance(r, dict) and "seconds" in r]
         report[s]["seconds"] = round(sum(times), 2) if times else None
-    export(course, report, got.rejected)
+    export(course, report, got.rejected, held)
     phases["grades.csv, report.csv"], t = time.perf_counter() - t, time.perf_counter()
     write_lms_exports(course, report, log=log)
     phases["LMS import files"], t = time.perf_counter() - t, time.perf_counter()
     try:
-        write_class_report(course, report, submitted=prepared)
+        write_class_report(course, report, submitted=prepared, guarantees=held)
     except Exception as e:  # noqa: BLE001 - the report must never cost the grades
         log(f"WARNING: no class report ({type(e).__name__}: {e})")
     phases["class report"] = time.perf_counter() - t

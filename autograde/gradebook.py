@@ -114,8 +114,10 @@ def read_manual(course: Path) -> dict:
     return manual
 
 
-def export(course: Path, report: dict, rejected: list[str] = ()) -> None:
-    """grades.csv (nbgrader's export of the gradebook) and report.csv (what happened to each file)."""
+def export(course: Path, report: dict, rejected: list[str] = (), held: list = ()) -> None:
+    """grades.csv (nbgrader's export of the gradebook) and report.csv (what happened to each file).
+    ``held``: the run's guarantees (``guarantees.of_run``), written first, one row each, under the
+    student_id ``guarantees.RUN_ROW``."""
     export_csv(course, course / "grades.csv")
     from nbgrader.api import Gradebook, MissingEntry
 
@@ -123,6 +125,9 @@ def export(course: Path, report: dict, rejected: list[str] = ()) -> None:
             open(course / "report.csv", "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["student_id", "score", "max_score", "notes"])
+        if held:
+            from .guarantees import csv_rows
+            w.writerows(csv_rows(held))
         for student in sorted(report):
             try:
                 sub = gb.find_submission(ASSIGNMENT, student)

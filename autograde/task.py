@@ -24,7 +24,7 @@ from pathlib import Path
 
 import nbformat
 
-from . import checks, probe, sandbox, tripwire
+from . import checks, outputs, probe, sandbox, tripwire
 from .course import ASSIGNMENT, _last_error, private_course, tool_env
 
 
@@ -89,7 +89,9 @@ def grade_task(bundle: bytes, student: str, notebooks: dict, timeout: int, confi
     student's kernels (their outputs, for the feedback page and the receipts), and this thread has
     the hidden tests probed in a probe server of its own (``probe_verdicts``): no verdict depends
     on anything a kernel did. What comes back from the worker is read with caps: its answer file,
-    the autograded notebooks nbgrader wrote (``MAX_NOTEBOOK_BYTES``), the last
+    the autograded notebooks nbgrader wrote (``MAX_NOTEBOOK_BYTES``; their outputs are cut to fit
+    by ``outputs.CapOutput``; where a copy is over it, or none was made, ``outputs.stand_in`` stands
+    in for it, so every notebook graded has a feedback page), the last
     ``STDERR_TAIL`` bytes of what it and its kernels wrote to stderr.
 
     The student's uid (confined, as root) is leased for this task alone on this host
@@ -149,11 +151,18 @@ def grade_task(bundle: bytes, student: str, notebooks: dict, timeout: int, confi
             data = _read_capped(src / n, MAX_NOTEBOOK_BYTES)
             if data is not None:
                 out["autograded"][n] = data.decode("utf-8", errors="replace")
+            elif n in result:      # no graded copy to read (too large, or none made): a page all the same
+                try:
+                    st = os.lstat(src / n)
+                    size = st.st_size if stat.S_ISREG(st.st_mode) else None
+                except OSError:
+                    size = None
+                out["autograded"][n] = outputs.stand_in(notebooks[n], size)
+                result[n]["note"] = ("its feedback page shows the notebook as handed in, without outputs: "
+                                     + (f"its graded copy is {size / 1e6:.1f} MB, over the {MAX_NOTEBOOK_BYTES >> 20} MB "
+                                        f"read back" if size is not None else "nbgrader made no graded copy of it"))
             if n in verdicts:          # a function the kernel ran and the probe could not: a human looks
-                tripwire.mark(verdicts[n], out["autograded"].get(n))
-            elif (src / n).exists() and n in result:
-                result[n]["note"] = (f"its graded copy is larger than {MAX_NOTEBOOK_BYTES >> 20} MB (its outputs): "
-                                     f"no feedback page is made for it")
+                tripwire.mark(verdicts[n], data.decode("utf-8", errors="replace") if data is not None else None)
         if keep_stages:
             out["stages"] = {}
             for p in sorted(src.rglob("*")):

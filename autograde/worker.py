@@ -17,6 +17,7 @@ import time
 from pathlib import Path
 
 from . import sandbox
+from .outputs import autograde_steps
 from .course import ASSIGNMENT, COURSE_ID, _last_error
 
 
@@ -62,6 +63,9 @@ def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | Non
     config.Execute.shutdown_kernel = "immediate"
     config.Execute.kernel_manager_class = GradingKernelManager    # notices the killed kernel within 10 ms
     config.KernelManager.transport = "ipc"
+    # the graded copy's outputs cut to a size its feedback page can be made from, with a note where cut,
+    # after SaveAutoGrades has scored them (outputs.py)
+    config.Autograde.autograde_preprocessors = autograde_steps(config)
     config.KernelManager.ip = str(sockets / "k")
     zygote = None
     if confine:
