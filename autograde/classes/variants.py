@@ -785,28 +785,51 @@ def student_id(i: int) -> str:
     return f"variant{i:03d}"
 
 
-def build(classes: list[list[Recipe]], executed: Path, work: Path, log=print) -> dict[str, bytes]:
+def build(classes: list[list[Recipe]], executed: Path, work: Path, log=print, jobs: int | None = None) -> dict[str, bytes]:
     """{zip member: bytes}: hand-in ``i`` is ``variant{i:03d}_<notebook>.ipynb``, the notebook of its
-    recipes, executed top to bottom in a kernel (smoke config, the stage cache in ``executed``)."""
+    recipes, executed top to bottom in a kernel (smoke config, the trained stages from ``executed``,
+    the solutions executed as tests/conftest.py executes them). ``jobs`` kernels at once (default:
+    two, or one on a single core), each with its own copy of ``executed``'s stages and outputs as its
+    ``OUT``, so that two notebooks never write the same figure or metrics file at once."""
+    import os
+    import queue
+    import shutil
+    from concurrent.futures import ThreadPoolExecutor
+
     import nbformat
 
     from .honest import ROOT, execute
 
-    files = {}
-    for i, recipes in enumerate(classes):
+    jobs = max(1, min(jobs or min(2, os.cpu_count() or 1), len(classes)))
+    outs: queue.Queue = queue.Queue()
+    for w in range(jobs):
+        out = work / f"_out{w}"
+        shutil.rmtree(out, ignore_errors=True)
+        shutil.copytree(executed, out, ignore=shutil.ignore_patterns("*.ipynb"))
+        outs.put(out)
+
+    def one(i: int) -> tuple[str, bytes]:
+        recipes = classes[i]
         name = GRADED[recipes[0].function].notebook
         release = nbformat.read(ROOT / "notebooks" / f"{name}.ipynb", as_version=4)
         solutions = nbformat.read(ROOT / "solutions" / f"{name}.ipynb", as_version=4)
         sid = student_id(i)
         log(f"variants: {sid} runs {name}: " + " | ".join(r.label() for r in recipes))
         nb = handin(recipes, release, solutions)
-        ran = execute(nb, work / sid, executed)[None]
-        files[f"{sid}_{name}.ipynb"] = nbformat.writes(ran).encode()
-    return files
+        out = outs.get()
+        try:
+            ran = execute(nb, work / sid, out)[None]
+        finally:
+            outs.put(out)
+        return f"{sid}_{name}.ipynb", nbformat.writes(ran).encode()
+
+    with ThreadPoolExecutor(jobs) as pool:
+        return dict(pool.map(one, range(len(classes))))
 
 
-def write_zip(out: Path, classes: list[list[Recipe]], executed: Path, work: Path, log=print) -> Path:
-    files = build(classes, executed, work, log)
+def write_zip(out: Path, classes: list[list[Recipe]], executed: Path, work: Path, log=print,
+              jobs: int | None = None) -> Path:
+    files = build(classes, executed, work, log, jobs)
     with zipfile.ZipFile(out, "w") as zf:
         for name, data in sorted(files.items()):
             zf.writestr(name, data)
@@ -847,6 +870,7 @@ def verdicts(course: Path, report: dict, classes: list[list[Recipe]]) -> list[di
                 scores = {"?": (0, f"not in the gradebook: {e}")}
             rep = report.get(sid, {})
             trip = list(rep.get("tripwires") or [])
+            failed = (rep.get("failed") or {}).get(f"{nbname}.ipynb")
             for r in recipes:
                 g = GRADED[r.function]
                 got, top = scores.get(g.test_id, (None, None))
@@ -855,10 +879,12 @@ def verdicts(course: Path, report: dict, classes: list[list[Recipe]]) -> list[di
                 message = v[-1] if isinstance(v, (tuple, list)) and v else v
                 if message is None and rep.get("failed"):
                     message = f"notebook failed: {rep['failed']}"
-                ok = got is not None and got == top and all(s == m for s, m in order.values()) and not trip
+                ok = (got is not None and got == top and all(s == m for s, m in order.values()) and not trip
+                      and not failed)
                 rows.append({"student": sid, "notebook": nbname, "function": r.function, "recipe": r.label(),
                              "kinds": r.kinds(), "points": got, "max": top, "order": order,
-                             "tripwires": trip, "verdict": message, "notes": rep.get("notes", []), "ok": ok})
+                             "tripwires": trip, "failed": failed, "verdict": message, "notes": rep.get("notes", []),
+                             "ok": ok})
     return rows
 
 
@@ -866,7 +892,8 @@ def print_rows(rows: list[dict], log=print) -> None:
     for row in rows:
         log(f"{'ok  ' if row['ok'] else 'FAIL'} {row['student']} {row['recipe']}\n"
             f"     points {row['points']}/{row['max']}, order {row['order'] or '-'}, "
-            f"tripwires {row['tripwires'] or '-'}\n     verdict: {row['verdict']}")
+            f"tripwires {row['tripwires'] or '-'}{', notebook failed: ' + str(row['failed']) if row['failed'] else ''}\n"
+            f"     verdict: {row['verdict']}")
 
 
 def failing_kinds(rows: list[dict]) -> dict[str, tuple[int, int]]:
@@ -879,28 +906,50 @@ def failing_kinds(rows: list[dict]) -> dict[str, tuple[int, int]]:
     return {k: (bad[k], seen[k]) for k in sorted(seen) if bad[k]}
 
 
+def load_recipes(path: Path) -> list[list[Recipe]]:
+    """A class as ``write_zip`` recorded it (``OUT.recipes.json``), to build and grade it again."""
+    saved = json.loads(Path(path).read_text())
+    return [[Recipe.from_json(d) for d in saved[sid]] for sid in sorted(saved)]
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("out", type=Path, help="the class's zip (its recipes go next to it, .recipes.json)")
+    p.add_argument("out", type=Path, help="the class's zip (its recipes go next to it, OUT.recipes.json)")
     p.add_argument("--n", type=int, default=20, help="hand-ins (the notebook 03 ones carry two variants)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--depth", default="1-2", help="how many axes each variant departs on, LO-HI (1-6: all at once)")
+    p.add_argument("--recipes", type=Path, default=None,
+                   help="the class recorded in this .recipes.json instead of a drawn one (to reproduce a run)")
     p.add_argument("--work", type=Path, default=None, help="a folder for the learners' working folders")
     p.add_argument("--executed", type=Path, default=None,
                    help="the solutions executed in smoke mode, with their stage cache (default: executed here)")
+    p.add_argument("--jobs", type=int, default=None, help="kernels at once while building (default: 2)")
     p.add_argument("--grade", type=Path, default=None, metavar="COURSE",
                    help="then grade the class in this (new) course folder and print each variant's verdict")
     p.add_argument("--timeout", type=int, default=120)
+    p.add_argument("--show", action="store_true", help="print every variant's cells, and stop")
     p.add_argument("--check-only", action="store_true",
-                   help="no kernels: check every variant in this process against the hidden tests")
+                   help="no kernels: check every variant in this process against the hidden tests, and stop")
     args = p.parse_args(argv)
     import tempfile
 
-    lo, _, hi = args.depth.partition("-")
-    classes = draw_class(args.n, args.seed, (int(lo), int(hi or lo)))
+    if args.recipes:
+        classes = load_recipes(args.recipes)
+    else:
+        lo, _, hi = args.depth.partition("-")
+        classes = draw_class(args.n, args.seed, (int(lo), int(hi or lo)))
     s = summary(classes)
     print(f"{s['hand-ins']} hand-ins, {s['variants']} variants ({s['distinct']} distinct), "
           f"{len(s['kinds'])} kinds: {' '.join(s['kinds'])}")
+    if args.show:
+        for i, rs in enumerate(classes):
+            for r in rs:
+                rendered = render(r)
+                print(f"\n===== {student_id(i)} {r.label()}")
+                for c in rendered.cells:
+                    print(f"----- a new cell above the answer\n{c}")
+                print(f"----- the answer cell\n{rendered.answer}")
+        return 0
     work = args.work or Path(tempfile.mkdtemp(prefix="pusht-variants-"))
     work.mkdir(parents=True, exist_ok=True)
     if args.check_only:
@@ -927,15 +976,17 @@ def main(argv=None):
         for name in NOTEBOOKS:
             print(f"executing the solutions: {name}")
             run_solution(ROOT / "solutions" / f"{name}.ipynb", executed, smoke=True)
-    print(f"wrote {write_zip(args.out, classes, executed, work / 'learners')}")
+    print(f"wrote {write_zip(args.out, classes, executed, work / 'learners', jobs=args.jobs)} "
+          f"and {recipes_file(args.out)}")
     if args.grade is None:
         return 0
     from .. import grade
 
     args.grade.mkdir(parents=True, exist_ok=True)
-    report = grade.grade_class(args.out, args.grade, timeout=args.timeout, log=print)
+    report = grade.grade_class(args.out, args.grade, timeout=args.timeout, log=print, progress=False)
     rows = verdicts(args.grade, report, classes)
     print_rows(rows)
+    args.out.with_suffix(".verdicts.json").write_text(json.dumps(rows, indent=1, default=str))
     bad = failing_kinds(rows)
     print(f"{sum(r['ok'] for r in rows)} of {len(rows)} variants earned full marks with no tripwire "
           f"({s['distinct']} distinct variants ran)")
