@@ -110,5 +110,17 @@ def test_every_variant_earns_full_marks_and_no_tripwire(graded, student):
         assert r["points"] is not None and r["points"] == r["max"], why
         assert all(s == m for s, m in r["order"].values()), why
     assert not (report[sid].get("tripwires") or []), why
-    notes = " | ".join(n for n in report[sid]["notes"] if "answer key, for the instructor" not in n)
-    assert "no credit" not in notes and "for the instructor" not in notes, (notes, why)
+    assert not any("no credit" in n for n in report[sid]["notes"]), (report[sid]["notes"], why)
+
+
+def test_the_instructor_is_asked_to_read_only_code_that_binds_names_at_run_time(graded, ci_class):
+    """Full marks stand either way; but a flag for the instructor (the delegation check cannot
+    tell what the function reaches) costs a human's time, so it is for code that binds names it
+    does not spell (``setattr``, ``globals()``), never for plain assignments, classes or files."""
+    _, rows = graded
+    recipes = {(variants.student_id(i), r.function): r for i, rs in enumerate(ci_class) for r in rs}
+    flagged = {(row["student"], row["function"]) for row in rows if row["flags"]}
+    print(f"{len(flagged)} of {len(rows)} variants flagged for the instructor")
+    for key in sorted(flagged):
+        assert variants.binds_at_run_time(recipes[key]), (key, recipes[key].label(),
+                                                          [row["flags"] for row in rows if row["student"] == key[0]])

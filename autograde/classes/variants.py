@@ -44,7 +44,6 @@ notebook's visible asserts pass on every variant before it is graded.
 from __future__ import annotations
 
 import argparse
-import copy
 import hashlib
 import json
 import random
@@ -842,6 +841,14 @@ def recipes_file(zip_path: Path) -> Path:
     return zip_path.with_suffix(".recipes.json")
 
 
+def binds_at_run_time(r: Recipe) -> bool:
+    """Whether the variant binds names the code does not spell (``setattr``, ``globals()``): where
+    the grader's static check may ask the instructor to read the code (``delegation.py``)."""
+    rendered = render(r)
+    text = "".join(rendered.cells) + rendered.answer
+    return "setattr(" in text or "globals()" in text
+
+
 def summary(classes: list[list[Recipe]]) -> dict:
     """How many variants, distinct variants and kinds a class holds."""
     flat = [r for rs in classes for r in rs]
@@ -880,11 +887,13 @@ def verdicts(course: Path, report: dict, classes: list[list[Recipe]]) -> list[di
                 if message is None and rep.get("failed"):
                     message = f"notebook failed: {rep['failed']}"
                 ok = (got is not None and got == top and all(s == m for s, m in order.values()) and not trip
-                      and not failed)
+                      and not failed)          # the acceptance: full marks, no tripwire (flags are reported)
+                flags = [n for n in rep.get("notes", []) if f"`{r.function}`" in n and ("no credit" in n or (
+                    "for the instructor" in n and "answer key, for the instructor" not in n))]
                 rows.append({"student": sid, "notebook": nbname, "function": r.function, "recipe": r.label(),
                              "kinds": r.kinds(), "points": got, "max": top, "order": order,
                              "tripwires": trip, "failed": failed, "verdict": message, "notes": rep.get("notes", []),
-                             "ok": ok})
+                             "flags": flags, "ok": ok})
     return rows
 
 
@@ -893,7 +902,8 @@ def print_rows(rows: list[dict], log=print) -> None:
         log(f"{'ok  ' if row['ok'] else 'FAIL'} {row['student']} {row['recipe']}\n"
             f"     points {row['points']}/{row['max']}, order {row['order'] or '-'}, "
             f"tripwires {row['tripwires'] or '-'}{', notebook failed: ' + str(row['failed']) if row['failed'] else ''}\n"
-            f"     verdict: {row['verdict']}")
+            f"     verdict: {row['verdict']}"
+            + "".join(f"\n     flagged: {f[:400]}" for f in row.get("flags", [])))
 
 
 def failing_kinds(rows: list[dict]) -> dict[str, tuple[int, int]]:
