@@ -115,12 +115,15 @@ def test_every_variant_earns_full_marks_and_no_tripwire(graded, student):
 
 def test_the_instructor_is_asked_to_read_only_code_that_binds_names_at_run_time(graded, ci_class):
     """Full marks stand either way; but a flag for the instructor (the delegation check cannot
-    tell what the function reaches) costs a human's time, so it is for code that binds names it
-    does not spell (``setattr``, ``globals()``), never for plain assignments, classes or files."""
+    tell what the function reaches) costs a human's time, so it is for hand-ins whose code binds
+    names it does not spell (``setattr``, ``globals()``; in notebook 03 the losses reach the
+    lambda-return through their default argument, so either variant's code counts), never for plain
+    assignments, classes, decorators or files."""
     _, rows = graded
-    recipes = {(variants.student_id(i), r.function): r for i, rs in enumerate(ci_class) for r in rs}
-    flagged = {(row["student"], row["function"]) for row in rows if row["flags"]}
-    print(f"{len(flagged)} of {len(rows)} variants flagged for the instructor")
-    for key in sorted(flagged):
-        assert variants.binds_at_run_time(recipes[key]), (key, recipes[key].label(),
-                                                          [row["flags"] for row in rows if row["student"] == key[0]])
+    flagged = {row["student"]: row for row in rows if row["flags"]}
+    print(f"{len(flagged)} of {len(ci_class)} hand-ins flagged for the instructor")
+    for i, recipes in enumerate(ci_class):
+        sid = variants.student_id(i)
+        if sid in flagged:
+            assert any(variants.binds_at_run_time(r) for r in recipes), (
+                sid, [r.label() for r in recipes], flagged[sid]["flags"])
