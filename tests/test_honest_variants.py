@@ -49,6 +49,8 @@ def test_the_class_covers_every_kind_with_distinct_variants(ci_class):
     print(f"{s['hand-ins']} hand-ins, {s['variants']} variants, {s['distinct']} distinct, {len(s['kinds'])} kinds")
     assert s["distinct"] == s["variants"] == 25
     assert set(s["kinds"]) == all_kinds(), sorted(all_kinds() - set(s["kinds"]))
+    bare = {r.binder for rs in ci_class for r in rs if r.wrap == "none"}        # no block keeps them whole
+    assert bare == {b for bs in variants.BINDERS.values() for b in bs}
     assert variants.draw_class(N, SEED) == ci_class                  # the seed decides the class
     for rs in ci_class:                                                 # a recipe reproduces its variant
         for r in rs:

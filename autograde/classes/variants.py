@@ -281,14 +281,17 @@ def _features(r: Recipe) -> dict[str, float]:
     f[f"fn:{r.function}/{r.store}"] = 1.0
     f[f"fn:{r.function}/{r.impl}"] = 1.0
     f[f"wrap-impl:{r.wrap}/{r.impl}"] = 0.5
+    if r.wrap == "none":          # a binder inside a with/if/try block may be kept whole with it:
+        f[f"bare:{r.binder}"] = 5.0    # each binder also on its own, its statements at the top level
     return f
 
 
 def draw_class(n: int, seed: int = 0, depth: tuple[int, int] = (1, 2), candidates: int = 400) -> list[list[Recipe]]:
     """``n`` hand-ins (each a list of recipes, one per graded function of its notebook; the notebook
     03 hand-ins carry two), drawn with ``seed``: each hand-in's recipes are chosen greedily from
-    ``candidates`` random draws so that the class covers every kind, then every store/binder pair,
-    as far as ``n`` allows. The notebooks take turns (02, 03, 04, 06, 02, ...)."""
+    ``candidates`` random draws so that the class covers every kind, every binder outside a wrap,
+    then every store/binder pair, as far as ``n`` allows. The notebooks take turns (02, 03, 04, 06,
+    02, ...)."""
     rng = random.Random(seed)
     notebooks = sorted(NOTEBOOK_FUNCTIONS)
     covered: set[str] = set()
