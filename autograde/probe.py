@@ -21,9 +21,10 @@ forged. So no verdict reads it. For each hidden test, the grader instead:
 
 What this proves: the numbers judged are what the hand-in's own definitions return on inputs they
 could not know in advance, computed where the package's answers do not exist. What it does not
-prove: that the function the student wrote is the one the kernel ran (a notebook that redefines
-it only at run time, with ``exec`` of a downloaded string or a ``%%writefile`` module, is judged
-on what its cells define, and loses the points); that the code is the student's own (a copy of the
+prove: that the function the student wrote is the one the kernel ran (the statements are run
+again, ``exec`` and ``%%writefile`` included, but a string downloaded at run time is not there: no
+network); where the kernel ran the test cell and the probe could not define or run the function,
+``tripwire.py`` tells the instructor instead of a silent 0; that the code is the student's own (a copy of the
 answer key is flagged for the instructor by ``answer_key.py``, not zeroed); that the student did
 not compute the answer with other package functions that are not exercises.
 """

@@ -529,6 +529,22 @@ def test_a_future_import_holds_for_every_later_cell_as_in_the_kernel(server):
 
 
 @needs_bwrap
+def test_a_module_the_notebook_writes_with_writefile_is_imported_as_in_the_kernel(server):
+    """``%%writefile`` writes its module in the probe's own folder, and the import finds it there;
+    other magics (``%matplotlib``, ``!pip``) do nothing in the probe."""
+    module = ("%%writefile my_reward.py\nimport math\nimport torch\n\n\n"
+              "def reward(norm_obs, mean, std):\n    obs = norm_obs * std + mean\n"
+              "    pos = torch.linalg.vector_norm(obs[..., 2:4], dim=-1)\n"
+              "    ang = torch.abs(torch.atan2(obs[..., 4], obs[..., 5]))\n"
+              "    return -0.5 * (pos / 0.5 + ang / math.pi), pos, ang\n")
+    cells = with_test(checks.REWARD, "%matplotlib inline\n!pip install nothing\n", module,
+                      "from my_reward import reward as reward_from_obs\n")
+    out = server.run(checks.REWARD, probe.program(cells, checks.REWARD.test_id, "reward_from_obs"))
+    v = checks.judge(checks.REWARD, out)
+    assert v.passed, (v.message, out["setup"])
+
+
+@needs_bwrap
 def test_statements_that_outlast_the_budget_stop_but_definitions_still_run(server):
     cells = with_test(checks.LAMBDA, "import time\nimport torch\n", "time_spent = [i for i in iter(int, 1)]\n",
                       JIT_LAMBDA)
