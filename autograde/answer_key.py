@@ -53,7 +53,7 @@ def _without_docstring(body: list) -> list:
 
 def normalised(fn: ast.FunctionDef) -> list[str]:
     """The function's body as printed statements after dropping what does not run and renaming."""
-    fn = ast.parse(ast.unparse(fn)).body[0]        # a copy
+    fn = cellcode.python_tree(ast.unparse(fn)).body[0]        # a copy
     fn.decorator_list, fn.returns = [], None
     for node in ast.walk(fn):
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
@@ -69,7 +69,7 @@ def normalised(fn: ast.FunctionDef) -> list[str]:
 def key(test_id: str) -> tuple[str, ...]:
     """The package's implementation of a test's function, normalised."""
     fn = checks.reference_function(checks.TESTS[test_id])
-    tree = ast.parse(textwrap.dedent(inspect.getsource(fn)))
+    tree = cellcode.python_tree(textwrap.dedent(inspect.getsource(fn)))
     return tuple(normalised(tree.body[0]))
 
 

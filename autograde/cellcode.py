@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import ast
 import re
+import threading
 from functools import lru_cache
 
 # Magics whose argument (line) or body (cell) is Python run in the learner's namespace.
@@ -64,6 +65,17 @@ def _python(src: str) -> str:
 
 MAX_CELL_CHARS = 200_000      # a cell's code that is parsed at all: a chapter cell is under 5,000
 
+# CPython 3.11 up to 3.11.8 keeps one recursion counter for turning a parse into ``ast`` objects; two
+# grading threads parsing at once can trip it ("SystemError: AST constructor recursion depth
+# mismatch", seen when two tasks started together). Every parse of the grader goes through here.
+_PARSE_LOCK = threading.RLock()
+
+
+def python_tree(text: str) -> ast.Module:
+    """``ast.parse(text)``, one thread at a time (see ``_PARSE_LOCK``)."""
+    with _PARSE_LOCK:
+        return ast.parse(text)
+
 
 @lru_cache(maxsize=4096)
 def parse(src: str) -> ast.Module | None:
@@ -74,7 +86,7 @@ def parse(src: str) -> ast.Module | None:
     if len(src) > MAX_CELL_CHARS:
         return None
     try:
-        tree = ast.parse(_python(src))
+        tree = python_tree(_python(src))
     except (SyntaxError, ValueError, RecursionError, MemoryError):   # the kernel would refuse it too
         return None
     body = []

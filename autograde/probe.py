@@ -70,7 +70,7 @@ def helpers_for(test) -> dict[str, str]:
     out = {}
     for name in sorted(names):
         source = inspect.getsource(checks.reference_function(checks.HELPERS[name]))
-        tree = ast.parse(textwrap.dedent(source))
+        tree = cellcode.python_tree(textwrap.dedent(source))
         tree.body[0].decorator_list = []
         out[name] = ast.unparse(tree)
     return out

@@ -27,6 +27,8 @@ from pathlib import Path
 
 import pusht
 
+from . import cellcode
+
 PACKAGE_DIR = Path(pusht.__file__).resolve().parent
 
 
@@ -50,8 +52,8 @@ class _Strip(ast.NodeTransformer):
         self.found.append(node.name)
         msg = (f"{self.module}.{node.name} is the package's own solution to {exercise}; while grading it is "
                f"not available: your function must compute the result itself")
-        node.body = [ast.parse(f"from pusht.grading import ReferenceRefused\nraise ReferenceRefused({msg!r})").body[0],
-                     ast.parse(f"raise ReferenceRefused({msg!r})").body[0]]
+        node.body = [cellcode.python_tree(f"from pusht.grading import ReferenceRefused\nraise ReferenceRefused({msg!r})").body[0],
+                     cellcode.python_tree(f"raise ReferenceRefused({msg!r})").body[0]]
         return node
 
     visit_FunctionDef = visit_AsyncFunctionDef = _fn
@@ -59,7 +61,7 @@ class _Strip(ast.NodeTransformer):
 
 def strip_source(text: str, module: str) -> tuple[str, list[str]]:
     """(the module's source with every ``@reference`` function's body replaced, their names)."""
-    tree = ast.parse(text)
+    tree = cellcode.python_tree(text)
     t = _Strip(module)
     tree = ast.fix_missing_locations(t.visit(tree))
     return (ast.unparse(tree) + "\n" if t.found else text), t.found
