@@ -342,8 +342,8 @@ def program(cells, test_id: str, function: str, ours: frozenset[str] = frozenset
                     groups.union(target, name)
 
     # what each statement may change: names it binds, and groups of values it changes; None: anything
-    sets_globals = {node.name: _global_writes(node) for _, node in stmts
-                    if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and _global_writes(node)}
+    sets_globals = {node.name: w for _, node in stmts
+                    if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and (w := _global_writes(node))}
     values = {name for k, r in enumerate(readings) if not isinstance(stmts[k][1], SETUP) for name in r.binds}
     keep = [False] * len(stmts)
     changes_names: list[set[str]] = []

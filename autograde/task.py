@@ -149,8 +149,9 @@ def grade_task(bundle: bytes, student: str, notebooks: dict, timeout: int, confi
         out = {"results": result, "autograded": {}}
         for n in notebooks:
             data = _read_capped(src / n, MAX_NOTEBOOK_BYTES)
-            if data is not None:
-                out["autograded"][n] = data.decode("utf-8", errors="replace")
+            graded = data.decode("utf-8", errors="replace") if data is not None else None
+            if graded is not None:
+                out["autograded"][n] = graded
             elif n in result:      # no graded copy to read (too large, or none made): a page all the same
                 try:
                     st = os.lstat(src / n)
@@ -162,7 +163,7 @@ def grade_task(bundle: bytes, student: str, notebooks: dict, timeout: int, confi
                                      + (f"its graded copy is {size / 1e6:.1f} MB, over the {MAX_NOTEBOOK_BYTES >> 20} MB "
                                         f"read back" if size is not None else "nbgrader made no graded copy of it"))
             if n in verdicts:          # a function the kernel ran and the probe could not: a human looks
-                tripwire.mark(verdicts[n], data.decode("utf-8", errors="replace") if data is not None else None)
+                tripwire.mark(verdicts[n], graded)
         if keep_stages:
             out["stages"] = {}
             for p in sorted(src.rglob("*")):

@@ -25,12 +25,19 @@ from . import cellcode
 MISSING = ("NameError", "UnboundLocalError", "ImportError", "ModuleNotFoundError")
 
 
+def _read(notebook_text: str | None):
+    try:
+        return json.loads(notebook_text) if notebook_text is not None else None
+    except ValueError:
+        return None
+
+
 def kernel_ran(notebook_text: str, test_id: str) -> bool:
     """Did the kernel run ``test_id``'s cell to its end (executed, no error output)?"""
-    try:
-        nb = json.loads(notebook_text)
-    except ValueError:
-        return False
+    return _ran(_read(notebook_text), test_id)
+
+
+def _ran(nb, test_id: str) -> bool:
     for cell in nb.get("cells", []) if isinstance(nb, dict) else []:
         if not isinstance(cell, dict) or cellcode.gid(cell) != test_id or cell.get("cell_type") != "code":
             continue
@@ -60,7 +67,8 @@ def reason(verdict: dict, ran_in_kernel: bool) -> str | None:
 
 def mark(verdicts: dict, notebook_text: str | None) -> None:
     """Add ``tripwire`` to each of one notebook's verdicts ({test id: verdict dict}) that needs it."""
+    nb = _read(notebook_text) if any(not v.get("passed") for v in verdicts.values()) else None
     for test_id, v in verdicts.items():
-        why = reason(v, notebook_text is not None and kernel_ran(notebook_text, test_id))
+        why = reason(v, _ran(nb, test_id))
         if why:
             v["tripwire"] = why
