@@ -14,7 +14,7 @@
 #   make meta     re-measure seeds 0-2 and the horizon sweep -> meta.yaml
 #   make times    make chapter, and record each notebook's measured time -> pusht/nb/times.json
 #   make pair     sync solutions/*.ipynb with their text twins text/solutions/*.py (jupytext)
-#   make claims   run notebooks 03-06 on seeds 0-5, record every claim they check -> benchmarks/claims.*
+#   make claims   run notebooks 03-06 on seeds 0-9, record every claim they check -> benchmarks/claims.*
 #   make site     make chapter, then the chapter site (Jupyter Book 1.x, offline) -> runs/site/html/index.html
 #   make lanes    the slow lanes CI runs after make test: the smoke site in a real browser, the learner's
 #                 path through JupyterLab, Colab's stack (make colab-check)

@@ -45,11 +45,12 @@ def _rewards(rollout, part: str | None) -> np.ndarray:
 
 
 def span_return(rollout, steps: int | None, part: str | None = None) -> float:
-    """Mean reward per step over the first ``steps`` steps (all of them for None), all starts;
-    with ``part`` ("position" or "yaw"), that term of the reward alone."""
-    r = _rewards(rollout, part)
-    r = r if steps is None else r[:steps]
-    return float(np.nanmean(r))
+    """Reward per step over the first ``steps`` steps (all of them for None): each start's mean over
+    the steps it lasted, averaged over the starts, as the headline's ``imagined_return_per_step`` and
+    ``real_return_per_step`` are (one number per quantity: an episode that ends early, at a success,
+    would weigh differently if every step of every start were pooled). With ``part`` ("position" or
+    "yaw"), that term of the reward alone; the two terms add up to the whole start by start."""
+    return float(np.nanmean(_per_start(rollout, steps, part)))
 
 
 def _per_start(rollout, steps, part=None):
@@ -90,6 +91,35 @@ def gap_split(rollouts: dict, steps: int | None, part: str | None = None) -> dic
     return out
 
 
+def size_split(rollouts: dict, steps: int | None) -> dict:
+    """The SIZE of the gap's and of the drift's error over the first ``steps`` steps, and its exact
+    standard error: a gap near zero can hide a large error when its position and yaw halves have
+    opposite signs, so a change of the error is judged on |position half| + |yaw half|.
+
+    For ``key`` in ("gap", "drift"): ``{key}_size`` = |mean position half| + |mean yaw half|; its
+    standard error ``{key}_size_se`` is that of the per-start values s_p * position_i + s_y * yaw_i
+    (s the sign of each half's mean), which average to the size exactly. When the halves share a
+    sign the size is |gap| and its standard error is the gap's: one quantity, one test.
+    ``{key}_yaw_minus_position`` = |yaw half| - |position half|, with its exact standard error
+    ``{key}_yaw_minus_position_se`` (per start s_y * yaw_i - s_p * position_i): which half is larger.
+    """
+    pos = {(p, w): _per_start(rollouts[f"{w}_{p}"], steps, "position") for p in POLICIES for w in ("dream", "real")}
+    yaw = {(p, w): _per_start(rollouts[f"{w}_{p}"], steps, "yaw") for p in POLICIES for w in ("dream", "real")}
+    out = {}
+    for key, pol in (("gap", "trained"), ("drift", "zero")):
+        xp = pos[pol, "dream"] - pos[pol, "real"]
+        xy = yaw[pol, "dream"] - yaw[pol, "real"]
+        ok = ~(np.isnan(xp) | np.isnan(xy))
+        xp, xy = xp[ok], xy[ok]
+        sp, sy = np.sign(xp.mean()) or 1.0, np.sign(xy.mean()) or 1.0
+        size, diff = sp * xp + sy * xy, sy * xy - sp * xp
+        out[f"{key}_size"] = float(size.mean())
+        out[f"{key}_size_se"] = _se(size)
+        out[f"{key}_yaw_minus_position"] = float(diff.mean())
+        out[f"{key}_yaw_minus_position_se"] = _se(diff)
+    return out
+
+
 def expert_signal(rollouts: dict, steps: int | None) -> dict:
     """Can the dream recognise success? The scripted expert solves the real task; its actions are
     replayed in the dream from the same starts (``dream_expert``). Over the first ``steps`` steps:
@@ -99,9 +129,25 @@ def expert_signal(rollouts: dict, steps: int | None) -> dict:
       errors over the starts (``..._se``). A dream whose signal is clearly positive rewards the
       pushes that solve the task over standing still: a learnable signal existed. A signal near
       zero, or negative, means the dream cannot tell success from doing nothing;
-    * ``expert_signal_yaw_dream``/``_real`` and ``..._position_...``: the same for each term.
+    * ``expert_signal_yaw_dream``/``_real`` and ``..._position_...``: the same for each term;
+    * ``expert_gap`` (± ``expert_gap_se``): the dream's pay for the expert's pushes minus reality's, per
+      start: the expert's own imagination gap, which needs no zero-action control;
+    * ``zero_dream_block_moved``: how far the zero-action dream moves a block nobody touches (m, mean
+      over the starts of its largest displacement in the span). The expert signal compares the expert
+      with standing still; where the dream moves the untouched block beyond the success tolerance,
+      "standing still" is not standing still in the dream, and the control is invalid.
     """
     out = {}
+    # the expert's own gap: what the dream pays its pushes minus what reality pays them (no zero-action
+    # control in it), and whether the zero-action control is valid: how far the dream moves a block
+    # nobody touches (mean over starts of the largest displacement within the span, m; a real untouched
+    # block does not move)
+    x = _per_start(rollouts["dream_expert"], steps) - _per_start(rollouts["real_expert"], steps)
+    x = x[~np.isnan(x)]
+    out["expert_gap"], out["expert_gap_se"] = float(np.mean(x)), _se(x)
+    obs = np.asarray(rollouts["dream_zero"].obs)
+    obs = obs if steps is None else obs[:steps + 1]
+    out["zero_dream_block_moved"] = float(np.linalg.norm(obs[:, :, 2:4] - obs[:1, :, 2:4], axis=-1).max(0).mean())
     for w in ("dream", "real"):
         out[f"expert_{w}_return_per_step"] = span_return(rollouts[f"{w}_expert"], steps)
         for part in (None, "position", "yaw"):

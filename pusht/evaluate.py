@@ -280,8 +280,10 @@ def two_world_eval(wm, agent, init_agent, seeds, horizon: int, mean, std,
     metrics["expert_dream_final_tee_dist"] = float(rollouts["dream_expert"].final_tee_dist.mean())
     metrics["expert_real_final_tee_dist"] = float(rollouts["real_expert"].final_tee_dist.mean())
     metrics["zero_action_real_final_tee_dist"] = float(rollouts["real_zero"].final_tee_dist.mean())
+    # the control for "real successes appear": how often a pusher that never moves succeeds from these starts
+    metrics["zero_action_real_success_rate"] = float(rollouts["real_zero"].success.mean())
     if train_horizon is not None:
-        from .analysis import expert_signal, gap_split
+        from .analysis import expert_signal, gap_split, size_split
 
         for span, steps in (("train_horizon", min(train_horizon, horizon)), ("eval_horizon", None)):
             for part in (None, "position", "yaw"):
@@ -290,6 +292,9 @@ def two_world_eval(wm, agent, init_agent, seeds, horizon: int, mean, std,
                     name = f"{key}_return_per_step" if key.endswith(("_dream", "_real")) else (
                         key.replace("gap", "imagination_gap") if key.startswith("gap") else f"gap_{key}")
                     metrics[f"{name}{tag}_{span}"] = value
+            for key, value in size_split(rollouts, steps).items():
+                name = key.replace("gap", "imagination_gap") if key.startswith("gap") else f"gap_{key}"
+                metrics[f"{name}_{span}"] = value
             for key, value in expert_signal(rollouts, steps).items():
                 metrics[f"{key}_{span}"] = value
     return metrics, rollouts

@@ -157,10 +157,10 @@ EXERCISES = {ex.name: ex for ex in [
         "pusht.nb.gap", "EX1_OPTIONS", None, "metrics", _experiment_ex1, _reconcile_ex1),
     Exercise(
         "ex2", "05_horizon",
-        "notebook 05: train the actor with 5-, 15- and 30-step dreams; what happens to the gap? (9 runs)",
+        "notebook 05: train the actor with 5-, 15- and 30-step dreams; what happens to the gap? (12 runs)",
         "We train the actor with three imagination horizons, 5, 15 and 30 steps (0.5, 1.5 and 3 s of dreamed "
-        "time per update), and at each horizon with three actor seeds (0, 1, 2), all on the same frozen world "
-        "model of your --seed. Every one of the nine policies is then evaluated the same way, in the dream and "
+        "time per update), and at each horizon with four actor seeds (0, 1, 2, 3), all on the same frozen world "
+        "model of your --seed. Every one of the twelve policies is then evaluated the same way, in the dream and "
         "in reality. The number to predict is the imagination gap: imagined minus real reward per step over "
         "the whole evaluation. Positive means the dream rates the policy above what reality pays it; negative "
         "means below. The letter is decided by the shortest horizon against the longest, by the rule below.",

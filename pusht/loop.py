@@ -259,9 +259,9 @@ def save_loop(result: LoopResult, out: Path) -> None:
 
 
 def round_line(m: dict) -> str:
-    """One round in one line, as the CLI prints it. Its rewards are pooled over every step the
-    episodes lasted (``..._eval_horizon``), as notebook 06's table reads them; they differ from the
-    per-episode means (``imagination_gap``) only where an episode ended early on a success."""
+    """One round in one line, as the CLI prints it: rewards per step over the whole evaluation
+    (``..._eval_horizon``, each start's mean over the steps it lasted, averaged over the starts: the
+    same numbers as ``imagination_gap``), as notebook 06's table reads them."""
     return (f"round {m['round']}: gap {m['imagination_gap_eval_horizon']:+.3f} (training horizon "
             f"{m['imagination_gap_train_horizon']:+.3f}), dream {m['trained_dream_return_per_step_eval_horizon']:+.3f}, "
             f"real {m['trained_real_return_per_step_eval_horizon']:+.3f}, success {m['real_success_rate']:.0%}, touching "

@@ -1,6 +1,6 @@
-"""``make claims``: run notebooks 03-06 on seeds 0-5 and record every claim they evaluated.
+"""``make claims``: run notebooks 03-06 on seeds 0-9 and record every claim they evaluated.
 
-    python scripts/claims.py [--seeds 0 1 2 3 4 5] [--out runs/claims] [--smoke] [--record]
+    python scripts/claims.py [--seeds 0 1 2 3 4 5 6 7 8 9] [--out runs/claims] [--smoke] [--record]
 
 Each notebook runs headless (papermill, as ``make chapter`` runs it) with ``SEED`` set, all seeds
 sharing one model cache under ``--out``; notebook 04 compares its ``SEED`` with the two seeds after
@@ -11,7 +11,9 @@ variable ``PUSHT_CLAIMS_LOG`` that the kernel inherits. At the end the logs beco
 * ``<out>/claims.json``: every evaluation, with the numbers its predicate read;
 * ``<out>/claims.md``: claim x seed, each cell "true", "FALSE" (a fixed claim that failed) or
   "alt" (a guarded claim that took its alternative), with counts where a notebook evaluates a claim
-  more than once;
+  more than once, and for each causal claim the control it is judged against; below it, any pair of
+  evaluations in one notebook run that judged one number with two different tests
+  (``pusht.nb.claims.conflicts``: there should be none);
 
 and with ``--record`` both are copied to ``benchmarks/`` with the host, the commit and the time,
 where ``tests/test_claims.py`` checks them against the registry.
@@ -32,7 +34,7 @@ from pathlib import Path
 
 from chapter import ROOT, execute
 
-from pusht.nb.claims import LOG_ENV, load_all
+from pusht.nb.claims import LOG_ENV, conflicts, load_all
 
 NOTEBOOKS = ("03_imagination_actor", "04_imagination_gap", "05_horizon", "06_closing_the_gap")
 
@@ -73,8 +75,8 @@ def collect(logs: Path) -> list[dict]:
 def matrix(rows: list[dict], seeds: list[int]) -> str:
     registry = load_all()
     names = sorted({r["claim"] for r in rows} | set(registry))
-    lines = ["| claim | kind | " + " | ".join(f"seed {s}" for s in seeds) + " |",
-             "|---|---|" + "---|" * len(seeds)]
+    lines = ["| claim | kind | control | " + " | ".join(f"seed {s}" for s in seeds) + " |",
+             "|---|---|---|" + "---|" * len(seeds)]
     for name in names:
         fixed = registry[name].fixed if name in registry else None
         cells = []
@@ -87,13 +89,51 @@ def matrix(rows: list[dict], seeds: list[int]) -> str:
             n_true = sum(got)
             cells.append("true" if n_true == len(got) else (bad if n_true == 0 else f"{n_true}/{len(got)} true"))
         kind = "fixed" if fixed else ("guarded" if fixed is False else "unregistered")
-        lines.append(f"| `{name}` | {kind} | " + " | ".join(cells) + " |")
+        control = (registry[name].control or "") if name in registry else ""
+        lines.append(f"| `{name}` | {kind} | {control} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+LETTERS = {"Exercise 1 (04)": "04.ex1_letter_decided", "Exercise 2 (05)": "05.ex2_letter_decided",
+           "Exercise 3 (06)": "06.ex3_letter_decided"}
+
+
+def letters_decided(rows: list[dict]) -> dict[str, dict[int, bool]]:
+    """For each exercise, seed -> whether its letter was decided beyond the noise on that seed's run (every
+    evaluation of the exercise's ``*_letter_decided`` claim held)."""
+    out: dict[str, dict[int, bool]] = {}
+    for ex, name in LETTERS.items():
+        for r in rows:
+            if r["claim"] == name:
+                out.setdefault(ex, {})[r["seed"]] = out.get(ex, {}).get(r["seed"], True) and r["holds"]
+    return out
+
+
+def letters_section(rows: list[dict]) -> str:
+    """How many seeds decided each exercise's letter beyond the noise."""
+    got = letters_decided(rows)
+    lines = ["## Exercise letters decided beyond the noise", "",
+             "A letter is decided when the test behind it is more than 10% away from its threshold (`|t|` against "
+             "`k`) and, for Exercise 2, the change is not 'unresolved' (claims `*.ex*_letter_decided`).", ""]
+    for ex in LETTERS:
+        seeds = got.get(ex, {})
+        undecided = sorted(s for s, ok in seeds.items() if not ok)
+        lines.append(f"* {ex}: {sum(seeds.values())} of {len(seeds)} seeds"
+                     + (f" (not decided on seed {', '.join(map(str, undecided))})" if undecided else ""))
+    return "\n".join(lines)
+
+
+def one_test_section(rows: list[dict]) -> str:
+    """The one-test-per-quantity check of the recorded evaluations, for the table's reader."""
+    bad = conflicts(rows)
+    head = ("## One test per quantity\n\nPairs of evaluations in one notebook run that judged the same number "
+            "with different standard errors, k or minimum effects (`pusht.nb.claims.conflicts`): ")
+    return head + ("none." if not bad else f"{len(bad)}:\n\n" + "\n".join(f"* {b}" for b in bad))
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4, 5])
+    p.add_argument("--seeds", type=int, nargs="+", default=list(range(10)))
     p.add_argument("--out", type=Path, default=ROOT / "runs" / "claims")
     p.add_argument("--smoke", action="store_true", help="the tiny config (a check of the machinery)")
     p.add_argument("--record", action="store_true", help="copy the table to benchmarks/")
@@ -130,7 +170,9 @@ def main(argv=None) -> int:
           "`true`: held on every evaluation for that seed. `alt`: a guarded claim that did not hold, so "
           "the notebook printed its alternative. `FALSE`: a fixed claim that did not hold (CI fails on "
           "it). `k/n true`: evaluated n times for that seed (per seed compared, horizon, round or fix), "
-          "held k times. `-`: not evaluated for that seed.\n\n" + matrix(rows, args.seeds) + "\n")
+          "held k times. `-`: not evaluated for that seed. The control: for a causal claim, the run that differs "
+          "from the claimed cause's run only in that cause (`pusht.nb.claims.CONTROLS`).\n\n"
+          + matrix(rows, args.seeds) + "\n\n" + letters_section(rows) + "\n\n" + one_test_section(rows) + "\n")
     (out / "claims.md").write_text(md)
     print(md)
     if args.record:

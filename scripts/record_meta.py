@@ -33,6 +33,7 @@ sys.path.insert(0, str(ROOT / "scripts"))
 
 from pusht.config import make_config  # noqa: E402
 from pusht.dreamer import FLOAT_KEYS, platform_fingerprint, run  # noqa: E402
+from pusht.nb.horizon import EX2_ACTOR_SEEDS  # noqa: E402
 from pusht.page import PAGE  # noqa: E402
 
 HEADLINE = ["imagined_return_per_step", "real_return_per_step", "imagination_gap",
@@ -299,6 +300,8 @@ ROWS = [("imagined_return_per_step", "imagined reward/step (dream)", "+.3f"),
         ("real_success_rate", "real success rate", ".2f"),
         ("real_block_displacement", "real block moved (m, mean)", ".3f"),
         ("real_episodes_touching_block", "real episodes the pusher touched the block", "d"),
+        ("imagination_gap_position_eval_horizon", "... its position half (where the block is)", "+.3f"),
+        ("imagination_gap_yaw_eval_horizon", "... its yaw half (how the block is turned)", "+.3f"),
         ("imagination_gap_train_horizon", "gap over the actor's training horizon (imag_horizon steps)", "+.3f"),
         ("gap_drift_train_horizon", "... of which drift (zero-action dream vs zero-action reality)", "+.3f"),
         ("gap_training_train_horizon", "... of which training (what training added in the dream beyond reality)", "+.3f"),
@@ -307,6 +310,13 @@ ROWS = [("imagined_return_per_step", "imagined reward/step (dream)", "+.3f"),
         ("replay_pusher_err_train_horizon", "model's pusher error replaying the real actions, 1.5 s (m)", ".3f"),
         ("zero_action_dream_final_tee_dist", "control: zero-action dream, final distance (m)", ".3f"),
         ("untrained_actor_dream_final_tee_dist", "control: untrained-actor dream, final distance (m)", ".3f"),
+        ("expert_signal_real_train_horizon", "expert control: reality pays the expert over standing still, "
+         "training horizon", "+.3f"),
+        ("expert_signal_dream_train_horizon", "expert control: the dream pays the expert over standing still, "
+         "training horizon", "+.3f"),
+        ("zero_dream_block_moved_train_horizon", "... valid only if the zero-action dream moves the untouched block "
+         "at most 0.02 m; it moves it (m)", ".3f"),
+        ("expert_gap_train_horizon", "the expert's own gap, dream minus reality, training horizon", "+.3f"),
         ("imagined_reward_first20_train", "imagined reward/step, first 20 iterations", "+.3f"),
         ("imagined_reward_last20_train", "imagined reward/step, last 20 iterations", "+.3f")]
 
@@ -416,7 +426,7 @@ def main(argv=None):
     p.add_argument("--out", type=Path, default=ROOT / "meta.yaml")
     p.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     p.add_argument("--horizons", type=int, nargs="+", default=[5, 15, 30])
-    p.add_argument("--actor-seeds", type=int, nargs="+", default=[0, 1, 2],
+    p.add_argument("--actor-seeds", type=int, nargs="+", default=list(EX2_ACTOR_SEEDS),
                    help="actor seeds per horizon of the sweep (on the world model of seed 0)")
     p.add_argument("--tolerance-only", action="store_true",
                    help="re-measure only the tolerance section of an existing --out")

@@ -159,7 +159,10 @@ def test_ex2_on_a_terminal_asks_again_after_a_refused_letter_and_an_empty_reason
              "[experiment finished] ex2", "Measured: (", "Reconcile ex2: you predicted (a); the measurement says (")
     assert "Traceback" not in t.text
     assert store(env)["ex2"]["choice"] == "a" and set(store(env)) == {"ex2"}
-    assert len(list((out / "metrics" / "horizon_sweep").glob("seed0_h*_actor*.json"))) == 9
+    from pusht.nb.horizon import EX2_ACTOR_SEEDS, EX2_HORIZONS
+
+    runs = len(EX2_HORIZONS) * len(EX2_ACTOR_SEEDS)
+    assert len(list((out / "metrics" / "horizon_sweep").glob("seed0_h*_actor*.json"))) == runs
 
 
 # --- refused and missing answers: a clear message, nothing locked, nothing run ------------------------

@@ -63,6 +63,24 @@ def metrics(dream=-0.215, real=-0.400, se=0.020, dream_tr=-0.285, real_tr=-0.400
     m.setdefault("gap_drift_position_eval_horizon", m["gap_drift_eval_horizon"] - m["gap_drift_yaw_eval_horizon"])
     m.setdefault("gap_drift_se_yaw_eval_horizon", 0.8 * m["gap_drift_se_eval_horizon"])
     m.setdefault("gap_drift_se_position_eval_horizon", 0.7 * m["gap_drift_se_eval_horizon"])
+    # the size of each error and |yaw| - |position|, with per-start standard errors (analysis.size_split):
+    # where the halves share a sign, the size is the gap's size and its standard error the gap's
+    for key, spans in (("imagination_gap", ("train_horizon", "eval_horizon")), ("gap_drift", ("eval_horizon",))):
+        for span in spans:
+            p_, y_ = m[f"{key}_position_{span}"], m[f"{key}_yaw_{span}"]
+            pse, yse = m[f"{key}_se_position_{span}"], m[f"{key}_se_yaw_{span}"]
+            whole_se = m[f"{key}_se_{span}"]
+            m.setdefault(f"{key}_size_{span}", abs(p_) + abs(y_))
+            m.setdefault(f"{key}_size_se_{span}", whole_se if p_ * y_ >= 0 else math.hypot(pse, yse))
+            m.setdefault(f"{key}_yaw_minus_position_{span}", abs(y_) - abs(p_))
+            m.setdefault(f"{key}_yaw_minus_position_se_{span}", math.hypot(pse, yse))
+    # the zero-action control: reality's zero-action rating is the same in every run (the same starts), the
+    # dream's is that plus the drift
+    m.setdefault("zero_action_dream_return_per_step", -0.45 + m["gap_drift_eval_horizon"])
+    for span in ("train_horizon", "eval_horizon"):
+        m.setdefault(f"zero_dream_block_moved_{span}", 0.01)
+        m.setdefault(f"expert_gap_{span}", -0.2)
+        m.setdefault(f"expert_gap_se_{span}", 0.02)
     return m
 
 
@@ -331,14 +349,22 @@ def test_the_conclusion_reads_each_fix():
     assert "its size rose from 0.185 to 0.274" in c
     assert c.count("does not count as a fix") == 3                    # the loop's training-horizon gap held
     assert "No fix produced a single real success" in c and "not beyond the noise and the minimum effect" in c
-    assert "it fell beyond the noise" in c and "may have taught the model otherwise" in c
+    # issue 38: a drift that went +0.230 -> -0.068 crossed zero: the opposite error, not a smaller one
+    assert "the opposite error, not a smaller one" in c and "may have taught the model otherwise" not in c
+    fell = nb06.conclusion(loop([-0.215, -0.387], drift=0.05, drift_se=0.01), single(), delta(), ensemble())
+    assert "it fell beyond the noise and the minimum effect, against round 0" in fell
+    assert "may have taught the model otherwise" in fell
     fixed = nb06.conclusion(loop([-0.215, -0.387], dream_tr=-0.395, training_tr=-0.05, training_tr_se=0.01),
                             single(), delta(), ensemble())
     assert "it counts as a fix of the gap" in fixed and "gloomier, not rosier" in fixed
     won = nb06.conclusion(loop([-0.215, -0.387], successes=[0, 2], training_tr=0.05, training_tr_se=0.01),
                           single(), delta(), ensemble())
-    assert "Real successes appeared with the loop (2/30)" in won and "No fix" not in won
+    assert "the loop 2/30 against 0/30 for round 0" in won and "could be chance" in won and "No fix" not in won
     assert "keeps learning things only the model pays for" in won
+    # issue 38's seed 12: 1/30 in every round, round 0 included, is not a success the loop bought
+    same = nb06.conclusion(loop([-0.215, -0.387], successes=[1, 1]), single(), delta(), ensemble())
+    assert "the loop 1/30, no more than round 0's 1/30: not something the fix bought" in same
+    assert "appeared" not in same
 
 
 def test_expert_ratios_are_read_from_either_kind_of_metrics():
@@ -378,9 +404,9 @@ def test_self_checks_are_well_formed():
 # --- the yaw half, the expert control, the fix verdict, every seed --------------------------------
 def test_the_halves_say_which_is_larger_only_beyond_the_noise_and_the_minimum_effect():
     m = metrics(yaw_frac=0.6)
-    # |yaw| - |position| = 0.037: within k = 2.05 times the bound 0.014 + 0.016 on its standard error
+    # |yaw| - |position| = 0.037: within k = 2.05 times its standard error, 0.021 (per start)
     close = nb06.halves_words(m)
-    assert "neither half is clearly the larger" in close and "standard error at most 0.030" in close
+    assert "neither half is clearly the larger" in close and "+0.037 ± 0.021" in close
     assert "the yaw half is the larger" in nb06.halves_words(metrics(yaw_frac=0.9))
     assert "the position half is the larger" in nb06.halves_words(metrics(yaw_frac=0.1))
     # beyond the noise (SEs of a thousandth) but 0.010 apart: below the minimum effect
@@ -397,6 +423,8 @@ def test_the_halves_say_which_is_larger_only_beyond_the_noise_and_the_minimum_ef
 
 def test_the_expert_control_has_three_verdicts():
     assert "recognises success" in nb06.expert_words(metrics(expert_dream=0.07, expert_dream_se=0.019))[1]
+    invalid = nb06.expert_words(metrics(expert_dream=0.07, zero_dream_block_moved_eval_horizon=0.3))[1]
+    assert "not valid on this run" in invalid and "the dream recognises success:" not in invalid
     assert "less than standing still" in nb06.expert_words(metrics())[1]
     tiny = nb06.expert_words(metrics(expert_dream=0.015, expert_dream_se=0.001))[1]     # beyond noise, too small
     assert "does not tell" in tiny and "minimum effect" in tiny
@@ -409,14 +437,27 @@ def test_the_rounds_sentence_reads_halves_and_the_expert_per_round():
     for m, e in zip(rounds, (-0.065, 0.003, 0.011, 0.071)):
         m["expert_signal_dream_eval_horizon"] = e
     s = nb06.rounds_sentence(rounds)
-    assert "A half counts as the larger only when" in s and "conservative" in s
+    assert "A half counts as the larger only when" in s and "start by start" in s
     assert "round 0: -0.065 ± 0.019 (pays them less than standing still)" in s
     assert "round 1: +0.003 ± 0.019 (does not tell them from standing still)" in s
     assert "round 3: +0.071 ± 0.019 (pays them more than standing still)" in s
     assert "+0.168 ± 0.014 in every round" in s and "30/30" in s
-    assert "the loop taught the model to pay the expert's pushes more" in s
+    assert "the loop taught the model to pay the expert's pushes more" in s and "against round 0" in s
+    # the path, not only the end points: -0.065 -> +0.003 -> +0.011 -> +0.071 went one way
+    assert "0 -> 1: +0.068; 1 -> 2: +0.008; 2 -> 3: +0.060" in s and "the path turns" not in s
     flat = nb06.rounds_sentence(loop([-0.215, -0.387]))
     assert "did not change what the model pays" in flat
+    # issue 38's path -0.080, +0.065, +0.063, -0.018 is told as a path that turns
+    turning = loop([-0.215, -0.214, -0.332, -0.387])
+    for m, e in zip(turning, (-0.065, -0.145, -0.080, -0.017)):
+        m["expert_signal_dream_eval_horizon"] = e
+    assert "the path turns" in nb06.rounds_sentence(turning)
+    # a control that moves the untouched block is not read as teaching: the expert's own gap is read instead
+    for m in turning:
+        m["zero_dream_block_moved_eval_horizon"] = 0.3
+    bad = nb06.rounds_sentence(turning)
+    assert "control invalid" in bad and "cannot be read as the loop teaching" in bad and "expert's own gap" in bad
+    assert "taught the model" not in bad
 
     def halves(*pairs):
         rs = loop([-0.215] * len(pairs))
@@ -443,9 +484,19 @@ def test_a_fix_needs_both_horizons_no_sign_flip_and_a_dream_on_the_table():
     good = single(dream=-0.39, dream_tr=-0.395)                          # both gaps near zero, same sign
     ok, text = nb06.fix_verdict(ref, good, "X", "the state model")
     assert ok and "X counts as a fix" in text and "within the 0.5 m" in text
-    off = single(dream=-0.39, dream_tr=-0.395, zero_action_dream_final_tee_dist=0.80)
+    off = single(dream=-0.39, dream_tr=-0.395, zero_action_dream_final_tee_dist=0.80,
+                 zero_dream_block_moved_eval_horizon=0.64)
     ok, text = nb06.fix_verdict(ref, off, "X", "the state model")
     assert not ok and "farther than the 0.5 m" in text
+    # issue 38's seed 12: the untouched block carried away 0.26 m, on the table, yet no fix: the reference's
+    # dream moved it 0.01 m
+    away = single(dream=-0.39, dream_tr=-0.395, zero_dream_block_moved_eval_horizon=0.26)
+    ok, text = nb06.fix_verdict(ref, away, "X", "the state model")
+    assert not ok and "moves the untouched block 0.260 m" in text and "within the 0.5 m" in text
+    # the drift turned into the opposite error: the gap closed by that trade
+    traded = single(dream=-0.39, dream_tr=-0.395, drift=-0.2)
+    ok, text = nb06.fix_verdict(ref, traded, "X", "the state model")
+    assert not ok and "changed sign beyond the noise, the opposite error" in text
     one = single(dream=-0.39)                                            # training horizon unchanged
     ok, text = nb06.fix_verdict(ref, one, "X", "the state model")
     assert not ok and "its size did not fall beyond the noise" in text
@@ -532,14 +583,20 @@ def test_every_claim_takes_both_branches_somewhere():
              loop([-0.215, -0.400, -0.300, -0.250], reals=[-0.4, -0.25, -0.3, -0.3], expert_dream=0.07,
                   training_tr=0.05, training_tr_se=0.01),
              loop([-0.215, -0.387], dream_tr=-0.395, training_tr=-0.05, training_tr_se=0.01, moved=0.0,
-                  moved_max=0.0, toward=0.0, drift=0.0)]
+                  moved_max=0.0, toward=0.0, drift=0.0),
+             # the control invalid, the expert's own gap above and below reality; the drift's size grows
+             loop([-0.215, -0.387], zero_dream_block_moved_eval_horizon=0.3, expert_gap_eval_horizon=0.1,
+                  drift=0.5),
+             loop([-0.215, -0.387], zero_dream_block_moved_eval_horizon=0.3, expert_gap_eval_horizon=0.001)]
     errs = [model_errors(b, 0.1 / (r + 1), expert_block=0.01 + 0.002 * r) for r, b in enumerate((0.064, 0.015))]
     cases.append(loop([-0.2, -0.3], errors=errs, moved=0.05, moved_max=0.06, toward=-0.04))
     better = [model_errors(0.064 / (r + 1), 0.117 / (r + 1), ol_policy=(0.13 / (r + 1), 0.14 / (r + 1)))
               for r in range(3)]
     cases.append(loop([-0.2, -0.3, -0.35], errors=better))
+    cases.append(loop([-0.215, -0.273]))        # a drop of 0.058, about k = 2.05 standard errors: a thin margin
     for rounds in cases:
         nb06.ex3_verdict(rounds)
+        nb06.ex3_reconciliation(rounds)
         nb06.reconcile_text(rounds)
         nb06.rounds_sentence(rounds)
         nb06.model_error_sentence(rounds)
@@ -560,3 +617,15 @@ def test_every_claim_takes_both_branches_somewhere():
     assert set(outcomes) == mine, mine - set(outcomes)
     one_sided = {n for n, o in outcomes.items() if o != {True, False}}
     assert not one_sided, one_sided
+
+
+def test_the_dream_coming_down_is_read_against_the_dream_of_a_pusher_that_never_moves():
+    # issue 38, seeds 11 and 12: the policy's dream came down, but the zero-action dream came down more
+    rounds = loop([-0.215, -0.387])
+    rounds[-1]["zero_action_dream_return_per_step"] = rounds[0]["zero_action_dream_return_per_step"] - 0.25
+    s = nb06.reconcile_text(rounds)
+    assert "The dream came down to meet reality" in s and "The whole dream grew gloomier" in s
+    assert "stopped promising" not in s
+    rounds[-1]["zero_action_dream_return_per_step"] = rounds[0]["zero_action_dream_return_per_step"]
+    s = nb06.reconcile_text(rounds)
+    assert "stopped promising what this policy does not deliver" in s and "-0.172 beyond the control's change" in s

@@ -96,10 +96,12 @@ def test_the_sentences_read_the_run_they_are_given(smoke):
 
 # ---- synthetic metrics: each claim's both branches --------------------------------------------
 def full_metrics(gap_=0.2, drift=0.15, training=0.0, motion=0.0, se=0.01, pos_share=0.4, success=0.0,
-                 expert_dream=-0.05, expert_real=0.15):
+                 expert_dream=-0.05, expert_real=0.15, zero_moved=0.01, expert_gap=-0.2):
     m = {"imagination_gap": gap_, "real_success_rate": success, "imagined_return_per_step": -0.2,
          "real_return_per_step": -0.2 - gap_, "expert_real_success_rate": 1.0}
     for span in gap.SPANS:
+        m[f"zero_dream_block_moved_{span}"] = zero_moved
+        m[f"expert_gap_{span}"], m[f"expert_gap_se_{span}"] = expert_gap, se
         for key, v in (("imagination_gap", gap_), ("gap_drift", drift), ("gap_training", training),
                        ("gap_motion", motion)):
             m[f"{key}_{span}"], m[f"{key}_se_{span}"] = v, se
@@ -116,10 +118,14 @@ STEPS = {"train_horizon": 15, "eval_horizon": 100}
 
 
 def test_exercise_one_verdict_covers_every_outcome():
-    def mm(gap_, gse, drift, dse, success=0.0):
+    def mm(gap_, gse, drift, dse, success=0.0, zero=0.0):
         return {"imagination_gap": gap_, "imagination_gap_se_eval_horizon": gse, "gap_drift_eval_horizon": drift,
-                "gap_drift_se_eval_horizon": dse, "real_success_rate": success}
-    assert gap.ex1_verdict([mm(0.2, 0.02, 0.2, 0.02, success=0.1), mm(0.2, 0.02, 0.2, 0.02)]) == "a"
+                "gap_drift_se_eval_horizon": dse, "real_success_rate": success, "zero_action_real_success_rate": zero,
+                "eval_episodes": 30}
+    assert gap.ex1_verdict([mm(0.2, 0.02, 0.2, 0.02, success=0.2), mm(0.2, 0.02, 0.2, 0.02)]) == "a"
+    # issue 38's seed 12: one real success in 30 is an event, not a transfer (Fisher's p = 0.5 against zero actions)
+    assert gap.ex1_verdict([mm(0.2, 0.02, 0.2, 0.02, success=1 / 30), mm(0.2, 0.02, 0.2, 0.02)]) == "c"
+    assert gap.ex1_verdict([mm(0.2, 0.02, 0.2, 0.02, success=0.2, zero=0.2)] * 2) == "c"   # standing still does as well
     assert gap.ex1_verdict([mm(0.2, 0.02, 0.15, 0.02)] * 2) == "c"        # rosy with zero actions
     assert gap.ex1_verdict([mm(0.2, 0.02, 0.02, 0.02)] * 2) == "b"        # the actor's doing
     assert gap.ex1_verdict([mm(0.03, 0.02, 0.0, 0.02)] * 2) == "d"        # within noise: not rosier
@@ -140,7 +146,7 @@ def test_a_term_is_only_called_positive_beyond_twice_its_noise_and_the_minimum_e
     m = full_metrics(training=0.05)
     m["gap_training_eval_horizon"] = 0.0
     s = gap.split_story(m, 15)
-    assert "exploitation" in s and "that advantage is gone" in s and "already over the first 15" in s
+    assert "exploitation" in s and "it does not last" in s and "already over the first 15" in s
     m["gap_training_eval_horizon"] = -0.1
     assert "that advantage is reversed" in gap.split_story(m, 15)
     m["gap_training_train_horizon"] = 0.01
@@ -159,7 +165,10 @@ def test_a_term_is_only_called_positive_beyond_twice_its_noise_and_the_minimum_e
     m = full_metrics(training=0.05)
     m["gap_training_eval_horizon"] = -0.003
     s = gap.split_story(m, 15)
-    assert "that advantage is gone from the whole run's mean" in s and "no rosier" not in s
+    assert "not told apart from zero over the whole run" in s and "it does not last" in s and "no rosier" not in s
+    m["gap_training_eval_horizon"] = 0.030               # issue 38: 1.9 SE and at least the minimum effect
+    m["gap_training_se_eval_horizon"] = 0.016
+    assert "not resolved, which is not the same as gone" in gap.split_story(m, 15)
     assert f"k = {gap.k_se(30):.2f} standard errors" in s and "Student's t" in s
 
 
@@ -222,6 +231,20 @@ def test_the_expert_control_says_whether_the_dream_recognises_success():
     m["expert_real_success_rate"] = 0.0
     s = gap.expert_text(m, STEPS)
     assert "fewer than half" in s and "recognise success" not in s and "solve the task" not in s
+
+
+def test_the_expert_control_is_read_only_where_standing_still_stands_still_in_the_dream():
+    # issue 38: a zero-action dream that carries the untouched block away makes "more than standing still"
+    # meaningless; the text says the control is invalid and reads the expert's own gap instead
+    for dream in (-0.05, 0.1, 0.005):
+        s = gap.expert_text(full_metrics(expert_dream=dream, zero_moved=0.21, expert_gap=-0.2), STEPS)
+        assert "not valid on this run" in s and "21.0 cm" in s
+        assert "it can recognise success" not in s and "less than standing still.**" not in s
+        assert "less than reality pays them" in s
+    assert "more than reality pays them" in gap.expert_text(full_metrics(zero_moved=0.5, expert_gap=0.1), STEPS)
+    assert "about what reality pays" in gap.expert_text(full_metrics(zero_moved=0.5, expert_gap=0.001), STEPS)
+    s = gap.expert_text(full_metrics(expert_dream=0.1, zero_moved=0.019), STEPS)      # within 2 cm: valid
+    assert "it can recognise success" in s and "control is valid" in s
 
 
 def test_run_shows_and_company_follow_the_training_term():
@@ -349,3 +372,13 @@ def test_every_claim_of_this_notebook_is_registered_and_keyword_only():
 def test_self_checks_are_well_formed():
     for q in gap.SELF_CHECKS.values():
         assert q.answer in q.options and q.why and q.text.endswith("?")
+
+
+def test_drifting_toward_the_typical_pose_means_most_of_the_way_not_five_millimetres():
+    # issue 38: a dreamed block that covered 3 cm of the real block's 14 cm to the data's mean position moved,
+    # but it did not "drift toward the typical pose"
+    assert not gap.dream_drifts_to_data_position(dream_to_mean=0.11, real_to_mean=0.14, near=gap.SUCCESS_POS)
+    assert gap.dream_drifts_to_data_position(dream_to_mean=0.05, real_to_mean=0.14, near=gap.SUCCESS_POS)
+    assert not gap.dream_drifts_to_data_position(dream_to_mean=0.005, real_to_mean=0.02, near=gap.SUCCESS_POS)
+    assert not gap.dream_drifts_to_data_yaw(dream_to_mean_deg=70, real_to_mean_deg=90, near_deg=10)
+    assert gap.dream_drifts_to_data_yaw(dream_to_mean_deg=30, real_to_mean_deg=90, near_deg=10)

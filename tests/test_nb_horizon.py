@@ -24,8 +24,11 @@ def labelled(fig):
 
 
 def sweep(means, spread=0.01):
-    """{horizon: [three actor seeds' values]} around the given means."""
-    return {h: [m - spread, m, m + spread] for h, m in zip(H, means)}
+    """{horizon: [three actor seeds' values]} around the given means. The seeds' offsets turn from one
+    horizon to the next (seed 0 is low at 5 steps, middle at 15, high at 30), so that a paired test
+    over the seeds sees a spread of the differences as Welch's saw a spread of the values."""
+    offsets = [-spread, 0.0, spread]
+    return {h: [m + offsets[(j + i) % 3] for j in range(3)] for i, (h, m) in enumerate(zip(H, means))}
 
 
 # --- the statistics ------------------------------------------------------------------------------
@@ -39,15 +42,20 @@ def test_a_change_counts_only_beyond_the_spread_across_seeds():
     up = nb05.gap_change([-0.16, -0.15, -0.17], [0.21, 0.22, 0.20])
     assert up.outcome == "up" and up.diff == pytest.approx(0.37) and up.ratio > up.k
     assert nb05.gap_change([0.21, 0.22, 0.20], [-0.16, -0.15, -0.17]).outcome == "down"
-    # the same mean difference (0.05) counts with a tight spread, not with a wide one
+    # the same mean difference (0.05) counts when the seeds' differences agree, not when they scatter
     assert nb05.gap_change([0.10, 0.11, 0.12], [0.15, 0.16, 0.17]).outcome == "up"
-    wide = nb05.gap_change([0.0, 0.11, 0.22], [0.05, 0.16, 0.27])
+    wide = nb05.gap_change([0.0, 0.11, 0.22], [0.16, 0.27, 0.05])
     assert wide.outcome == "same" and wide.ratio < wide.k
-    # k is Student's t at Welch's degrees of freedom: 4 for equal spreads and three seeds each
-    assert nb05.gap_change([1, 2, 3], [2, 3, 4]).df == pytest.approx(4.0)
-    assert nb05.gap_change([1, 2, 3], [2, 3, 4]).k == pytest.approx(2.776, abs=2e-3)
+    # paired by actor seed: what a seed adds to both horizons cancels (a spread of 0.1 between seeds that
+    # moves each seed by the same 0.05 is no noise at all), and k is Student's t at n - 1 degrees of freedom
+    assert nb05.gap_change([0.0, 0.1, 0.2], [0.05, 0.15, 0.25]).outcome == "up"
+    assert nb05.gap_change([1, 2, 3], [2, 3.1, 4]).df == pytest.approx(2.0)
+    assert nb05.gap_change([1, 2, 3], [2, 3.1, 4]).k == pytest.approx(4.303, abs=2e-3)
+    assert nb05.gap_change([1, 2, 3], [2, 3.1, 4]).test == "paired t-test over actor seeds"
     with pytest.raises(ValueError, match="at least two actor seeds"):
-        nb05.gap_change([0.1], [0.2, 0.3])
+        nb05.gap_change([0.1], [0.2])
+    with pytest.raises(ValueError, match="the same seeds on both sides"):
+        nb05.gap_change([0.1, 0.2], [0.2, 0.3, 0.4])
 
 
 def test_identical_seeds_still_give_a_verdict():
@@ -86,7 +94,7 @@ def test_the_reconciliation_names_each_horizon_and_the_sign_flip():
     assert "From 5 to 30 steps the gap rose" in text and "changed sign" in text
     same = nb05.reconcile_text(sweep([0.20, 0.20, 0.205]), 30, 100)
     assert "did not change beyond the spread" in same and "changed sign" not in same
-    assert "Welch's t-test" in text and "k = " in text and "minimum effect that matters 0.020" in text
+    assert "paired t-test" in text and "k = " in text and "minimum effect that matters 0.020" in text
 
 
 def test_the_worlds_sentence_says_which_side_moved():
@@ -114,7 +122,7 @@ def test_the_terms_sentence_sees_what_the_horizon_cannot_change():
     c = nb05.conclusion(sweep([-0.15, 0.13, 0.21]), sweep([-0.41, -0.40, -0.41]), terms)
     assert "did not change detectably" in c and "The gap did move" in c and "all of that change" in c
     c = nb05.conclusion(sweep([0.20, 0.20, 0.205]), sweep([-0.5, -0.4, -0.3]), terms)
-    assert "Reality's pay changed" in c and "Welch's t-test" in c and "not tell apart from no change" in c
+    assert "Reality's pay changed" in c and "paired t-test" in c and "not tell apart from no change" in c
     # defect 7: -0.452 -> -0.442, far beyond its spread, is NOT "reality moved"
     c = nb05.conclusion(sweep([0.2, 0.2, 0.2]), sweep([-0.452, -0.447, -0.442], spread=0.001), terms)
     assert "about the same" in c and "smaller than the minimum effect" in c and "changed with" not in c
@@ -180,7 +188,7 @@ def test_self_checks_are_well_formed():
 
 # --- issue 29: minimum effect, mechanisms, halves, generated notes ------------------------------
 def test_a_detected_change_below_the_minimum_effect_is_not_a_change():
-    short, long = [-0.453, -0.452, -0.451], [-0.443, -0.442, -0.441]        # +0.010, ~12 SE out
+    short, long = [-0.453, -0.452, -0.451], [-0.443, -0.4425, -0.4405]      # +0.010, ~12 SE out
     t, kind = nb05.judge_change("real_rating", short, long)
     assert t.detected and not t.matters and kind == "small"
     assert "less than the minimum effect" in nb05.change_phrase(t, kind)
@@ -188,21 +196,21 @@ def test_a_detected_change_below_the_minimum_effect_is_not_a_change():
     assert nb05.ex2_verdict({5: short, 30: long}) == "c"
     assert nb05.judge_change("gap", [0.0, 0.1, 0.2], [0.3, 0.4, 0.5])[1] == "up"
     assert nb05.judge_change("gap", [0.3, 0.4, 0.5], [0.0, 0.1, 0.2])[1] == "down"
-    assert nb05.judge_change("gap", [0.0, 0.3, 0.6], [0.1, 0.4, 0.7])[1] == "unresolved"   # +0.1: not resolved
-    assert nb05.judge_change("gap", [0.0, 0.3, 0.6], [0.01, 0.31, 0.61])[1] == "same"
+    assert nb05.judge_change("gap", [0.0, 0.3, 0.6], [0.4, 0.7, 0.0])[1] == "unresolved"   # +0.1: not resolved
+    assert nb05.judge_change("gap", [0.0, 0.3, 0.6], [0.31, 0.61, 0.01])[1] == "same"
     assert nb05.judge_sign("training", [-0.2, 0.0, 0.1])[1] == "unresolved"
     assert nb05.judge_sign("training", [0.010, 0.011, 0.012])[1] == "small"
     assert nb05.judge_sign("training", [-0.3, -0.31, -0.32])[1] == "down"
     assert nb05.judge_sign("training", [0.3, 0.31, 0.32])[1] == "up"
     assert nb05.judge_sign("training", [-0.1, 0.0, 0.1])[1] == "same"
     assert "3.4" not in nb05.EX2_OPTIONS["c"] and "minimum effect" in nb05.EX2_OPTIONS["c"]
-    assert "0.020" in nb05.EX2_RULE and "Welch" in nb05.EX2_RULE
+    assert "0.020" in nb05.EX2_RULE and "paired" in nb05.EX2_RULE
 
 
 def test_every_verdict_says_its_test_t_and_k():
     t, kind = nb05.judge_change("gap", [0.1, 0.11, 0.12], [0.3, 0.31, 0.32])
     phrase = nb05.change_phrase(t, kind)
-    assert "Welch's t-test" in phrase and "|t| = " in phrase and "k = " in phrase and "0.020" in phrase
+    assert "paired t-test" in phrase and "|t| = " in phrase and "k = " in phrase and "0.020" in phrase
     line = nb05.horizon_line(5, [-0.10, -0.104, -0.108], "training", "training")
     assert "|t| = " in line and "k = 4.30" in line
     assert "k = 4.30" in nb05.rule_text(3) and "2 degrees of freedom" in nb05.rule_text(3)
@@ -345,7 +353,7 @@ def test_an_unresolved_change_of_the_gap_is_said_to_be_unresolved():
     assert "not resolved" in r and "could not resolve the change, not because the gap stayed put" in r
     assert "spread across actor seeds only" in r and "same evaluation starts" in r
     assert "**stays put**" not in nb05.EX2_OPTIONS["c"] and "No resolved change" in nb05.EX2_OPTIONS["c"]
-    small = nb05.reconcile_text({5: [0.200, 0.201, 0.202], 30: [0.210, 0.211, 0.212]}, 30, 100)
+    small = nb05.reconcile_text({5: [0.200, 0.201, 0.202], 30: [0.210, 0.2115, 0.2125]}, 30, 100)
     assert "could not resolve" not in small and "smaller than the minimum effect" in small
     same = nb05.reconcile_text(sweep([0.20, 0.20, 0.205]), 30, 100)
     assert "could not resolve" not in same and "So the letter" not in same
@@ -356,7 +364,7 @@ def test_an_unresolved_change_of_the_gap_is_said_to_be_unresolved():
     assert "from 15 to 30 steps the gap rose" in c and "not told apart from seed luck" not in c
     c = nb05.conclusion(sweep([0.20, 0.20, 0.205]), sweep([-0.42, -0.41, -0.41]), terms)
     assert "not told apart from seed luck" in c and "neighbouring" not in c
-    c = nb05.conclusion(SEED7, {5: [-0.45, -0.40, -0.35], 30: [-0.40, -0.35, -0.30]}, terms)
+    c = nb05.conclusion(SEED7, {5: [-0.45, -0.40, -0.35], 30: [-0.35, -0.30, -0.40]}, terms)
     assert "reality's pay changed with the horizon is not resolved" in c
 
 
@@ -387,6 +395,28 @@ def test_the_block_sentence_contrasts_the_dream_with_reality():
         sweep([0.16] * 3), sweep([0.16] * 3), 0.158)
     assert nb05.dream_block_ends_nearer(final=[0.05, 0.06], spawn=0.2, min_effect=0.02)
     assert not nb05.real_block_ends_nearer(final=[0.19, 0.195], spawn=0.2, min_effect=0.02)
+
+
+def test_the_pushing_is_credited_only_against_a_pusher_that_never_moves():
+    # issue 38, seed 9: the dreamed block ends nearer than it spawned, but a pusher that never moves brings the
+    # dreamed block nearer still (0.048 m against the actor's 0.072 m): the block came in by drift, not pushing
+    dream, real = sweep([0.072] * 3, spread=0.003), sweep([0.17] * 3, spread=0.003)
+    s = nb05.block_sentence(dream, real, 0.158, zero_final=0.048)
+    assert "clearly nearer the target than where it spawned" in s
+    assert "the dream shows the pushing bringing the block in" not in s
+    assert "a pusher that never moves, which the dream carries to 0.048 m" in s and "by the model's drift" in s
+    # the same dream against a zero-action dream that leaves the block out: the pushing is credited
+    s = nb05.block_sentence(dream, real, 0.158, zero_final=0.15)
+    assert "there the dream shows the pushing bringing the block in" in s
+    # mixed: credited at the horizons that beat the control only
+    s = nb05.block_sentence(sweep([0.03, 0.06, 0.1], spread=0.003), real, 0.158, zero_final=0.08)
+    assert "After training with 5 and 15-step dreams the dreamed block also ends nearer" in s
+    assert "But after training with 30-step dreams" in s
+    # without the control, no causal reading at all
+    assert "pushing" not in nb05.block_sentence(dream, real, 0.158)
+    assert nb05.dream_pushing_beats_zero(final=[0.05, 0.051], zero=0.1, min_effect=0.02)
+    assert not nb05.dream_pushing_beats_zero(final=[0.072, 0.075], zero=0.048, min_effect=0.02)
+    assert nb05.dream_pushing_beats_zero.claim.control == "zero actions"
 
 
 def test_the_gap_figure_keeps_the_dots_beside_the_bar():

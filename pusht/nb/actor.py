@@ -274,15 +274,17 @@ def reach_table(reach: dict[str, dict]) -> str:
 # errors whatever the size. Each sentence has its true alternative.
 
 
-def _change_claims(name: str, what: str):
+def _change_claims(name: str, what: str, control: str | None = None):
     """Three registered claims on one measured change ``what`` (keyword inputs diff, se, k,
     min_effect): it rose, it fell (beyond k SE and by at least the minimum effect), it was detected
     (beyond k SE, whatever its size)."""
-    @claim(f"03.{name}_rose", f"{what} rose beyond k standard errors and by at least the minimum effect")
+    @claim(f"03.{name}_rose", f"{what} rose beyond k standard errors and by at least the minimum effect",
+           control=control)
     def rose(*, diff, se, k, min_effect):
         return diff > k * se and diff >= min_effect and diff > 0
 
-    @claim(f"03.{name}_fell", f"{what} fell beyond k standard errors and by at least the minimum effect")
+    @claim(f"03.{name}_fell", f"{what} fell beyond k standard errors and by at least the minimum effect",
+           control=control)
     def fell(*, diff, se, k, min_effect):
         return -diff > k * se and -diff >= min_effect and diff < 0
 
@@ -294,10 +296,12 @@ def _change_claims(name: str, what: str):
 
 
 IMAGINED = _change_claims("imagined", "the imagined reward per step (last 20 updates minus first 20)")
-REAL_FLOOR = _change_claims("real_floor", "the real floor (final policy minus untrained, on the monitor's starts)")
-WIRING_RISE = _change_claims("wiring_rise", "the imagined rise with Dreamer's wiring minus the rise with the page's")
+REAL_FLOOR = _change_claims("real_floor", "the real floor (final policy minus untrained, on the monitor's starts)",
+                            "the untrained actor")
+WIRING_RISE = _change_claims("wiring_rise", "the imagined rise with Dreamer's wiring minus the rise with the page's",
+                             "the page's wiring")
 WIRING_FLOOR = _change_claims("wiring_floor", "the real floor's change with Dreamer's wiring minus the change with "
-                              "the page's (per start, on the monitor's starts)")
+                              "the page's (per start, on the monitor's starts)", "the page's wiring")
 OBJECTIVE = _change_claims("objective", "the mean lambda-return the actor maximises (last 20 updates minus first 20)")
 
 

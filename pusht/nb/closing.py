@@ -47,14 +47,18 @@ why they are what they are):
   ``ERR_RES``: a change of an error counts when it exceeds 1 mm. That is a resolution, not a test:
   the sentences say so.
 * **Which half of a gap is the larger.** A half is "the larger" only when the difference of the
-  sizes, |yaw| - |position|, exceeds k standard errors and is at least the minimum reward effect
-  (:func:`halves_order`); otherwise neither half is clearly the larger. The metrics keep each
-  half's standard error but not their covariance, so the difference's standard error is bounded by
-  se_position + se_yaw (the standard error of a difference is at most the sum of the two):
-  conservative. The same bound serves the **size of the error**, |position| + |yaw| (the gap can
-  reach zero with both halves large and of opposite signs: they cancel): a fix must shrink it too
-  (:func:`fix_verdict`). Two halves **cancel almost exactly** when they have opposite signs and
-  their sum is less than ``CANCEL_SHARE`` (a quarter) of |position| + |yaw|.
+  sizes, |yaw| - |position|, exceeds k of its standard errors and is at least the minimum reward
+  effect (:func:`halves_order`); otherwise neither half is clearly the larger. Its standard error
+  is computed start by start (``analysis.size_split``). So is that of the **size of the error**,
+  |position| + |yaw| (the gap can reach zero with both halves large and of opposite signs: they
+  cancel): a fix must shrink it too (:func:`fix_verdict`), and the drift is judged by its size the
+  same way. Where the halves share a sign the size is the gap's size with the gap's standard error,
+  so the gap and the size are one quantity under one test. Two halves **cancel almost exactly**
+  when they have opposite signs and their sum is less than ``CANCEL_SHARE`` (a quarter) of
+  |position| + |yaw|.
+* **The expert control** (expert minus zero actions) is valid only where the zero-action dream
+  leaves an untouched block within the success tolerance (``gap.expert_control_words``); where it
+  does not, the sentences say so and read the expert's own gap (dream minus reality) instead.
 * ``ARENA``: a dreamed pusher farther from the real one than the arena is wide is off the table.
 """
 
@@ -68,8 +72,9 @@ import numpy as np
 from ..env import ARENA_HALF, CONTROL_DT, OBS_NAMES, SUCCESS_POS
 from ..selfcheck import Question
 from .claims import claim
-from .gap import NEAR
-from .stats import LEVEL, MIN_REWARD_EFFECT, Test, k_for, outcome as _test_outcome
+from .gap import NEAR, expert_control_words, register_expert_control
+from .stats import (LEVEL, MIN_REWARD_EFFECT, THIN_MARGIN, Test, clear_of_threshold, count_rise_p, k_for,
+                    margin_words, outcome as _test_outcome)
 from . import figure
 
 # 1 mm: the resolution at which the model's errors are read as changed. Physically: a thirtieth of
@@ -93,13 +98,13 @@ SPAN_KEYS = ("train_horizon", "eval_horizon")
 
 # --- Exercise 3 ---------------------------------------------------------------------------------
 EX3_OPTIONS = {
-    "a": "The gap **shrinks** and real success **rises above 0%**: after the last round at least one "
-         "real evaluation episode succeeds.",
-    "b": "The gap **shrinks**, but real success **stays at 0%**: no real evaluation episode succeeds "
-         "after the last round either.",
+    "a": "The gap **shrinks** and real success **rises**: more real evaluation episodes succeed after the last "
+         "round than in round 0.",
+    "b": "The gap **shrinks**, but real success **does not rise**: no more real evaluation episodes succeed after "
+         "the last round than in round 0 (0% in both, on most seeds).",
     "c": "The gap **does not shrink** (as the note defines it: it stays within the noise, moves by less than "
-         "the minimum effect, grows, or changes sign), and real success **stays at 0%**.",
-    "d": "The gap **does not shrink** (as the note defines it), yet real success **rises above 0%**.",
+         "the minimum effect, grows, or changes sign), and real success **does not rise**.",
+    "d": "The gap **does not shrink** (as the note defines it), yet real success **rises**.",
 }
 EX3_NOTE = ("\"Shrinks\" means: the gap's size |imagined minus real reward per step| over the whole "
             "evaluation is smaller after the last round than in round 0 (1) by more than the noise of the two "
@@ -108,7 +113,7 @@ EX3_NOTE = ("\"Shrinks\" means: the gap's size |imagined minus real reward per s
             f"that matters, {MIN_REWARD_EFFECT:.2f} reward per step (the reward of holding the block 2 cm, the "
             "success tolerance, nearer the target on every step). A gap that ends on the other side of zero, "
             "beyond the noise at both ends, has changed sign, not shrunk: the dream traded one error for the "
-            "opposite one. \"Rises above 0%\" means: more real successes after the last round than in round 0, "
+            "opposite one. \"Rises\" means: more real successes after the last round than in round 0, "
             "where one success counts (a success is an event, not an estimate).")
 
 
@@ -131,65 +136,63 @@ def _size_rose(first, first_se, last, last_se, k, min_effect) -> bool:
 
 
 @claim("06.gap_shrank", "the gap's size fell by more than k standard errors of the change and by at least the "
-       "minimum effect, without ending on the other side of zero")
+       "minimum effect, without ending on the other side of zero", control="round 0")
 def gap_shrank(*, first, first_se, last, last_se, k, min_effect):
     return _size_fell(first, first_se, last, last_se, k, min_effect)
 
 
 @claim("06.gap_grew", "the gap's size rose by more than k standard errors of the change and by at least the "
-       "minimum effect")
+       "minimum effect", control="round 0")
 def gap_grew(*, first, first_se, last, last_se, k, min_effect):
     return _size_rose(first, first_se, last, last_se, k, min_effect)
 
 
-@claim("06.gap_crossed_zero", "the gap ended on the other side of zero, beyond k standard errors at both ends")
+@claim("06.gap_crossed_zero", "the gap ended on the other side of zero, beyond k standard errors at both ends", control="round 0")
 def gap_crossed_zero(*, first, first_se, last, last_se, k):
     return _crossed(first, first_se, last, last_se, k)
 
 
 @claim("06.gap_reopened", "after its smallest round the gap's size rose again by the last round, beyond k "
-       "standard errors of that change and by at least the minimum effect")
+       "standard errors of that change and by at least the minimum effect", control="round 0")
 def gap_reopened(*, sizes, ses, k, min_effect):
     i = int(np.argmin(sizes))
     return i < len(sizes) - 1 and _size_rose(sizes[i], ses[i], sizes[-1], ses[-1], k, min_effect)
 
 
-@claim("06.change_up", "the quantity rose beyond k standard errors and by at least the minimum effect")
+@claim("06.change_up", "the quantity rose beyond k standard errors and by at least the minimum effect", control="round 0")
 def change_up(*, diff, se, k, min_effect):
     return _test_outcome(diff, k * se, min_effect) == "up"
 
 
-@claim("06.change_down", "the quantity fell beyond k standard errors and by at least the minimum effect")
+@claim("06.change_down", "the quantity fell beyond k standard errors and by at least the minimum effect", control="round 0")
 def change_down(*, diff, se, k, min_effect):
     return _test_outcome(diff, k * se, min_effect) == "down"
 
 
 @claim("06.dream_rosier", "the dream rated the policy above reality, beyond k standard errors and by at least the "
-       "minimum effect")
+       "minimum effect", control="reality")
 def dream_rosier(*, value, se, k, min_effect):
     return value > k * se and value >= min_effect
 
 
 @claim("06.dream_gloomier", "the dream rated the policy below reality, beyond k standard errors and by at least the "
-       "minimum effect")
+       "minimum effect", control="reality")
 def dream_gloomier(*, value, se, k, min_effect):
     return value < -k * se and -value >= min_effect
 
 
 @claim("06.yaw_half_clearly_larger", "the yaw half of the gap is larger in size than the position half, by more "
-       "than k times a bound on the standard error of the difference (se_position + se_yaw) and by at least "
-       "the minimum effect")
-def yaw_half_clearly_larger(*, position, yaw, se_position, se_yaw, k, min_effect):
+       "than k standard errors of the difference (per start) and by at least the minimum effect")
+def yaw_half_clearly_larger(*, position, yaw, diff_se, k, min_effect):
     diff = abs(yaw) - abs(position)
-    return diff > k * (se_position + se_yaw) and diff >= min_effect
+    return diff > k * diff_se and diff >= min_effect
 
 
 @claim("06.position_half_clearly_larger", "the position half of the gap is larger in size than the yaw half, by "
-       "more than k times a bound on the standard error of the difference (se_position + se_yaw) and by at "
-       "least the minimum effect")
-def position_half_clearly_larger(*, position, yaw, se_position, se_yaw, k, min_effect):
+       "more than k standard errors of the difference (per start) and by at least the minimum effect")
+def position_half_clearly_larger(*, position, yaw, diff_se, k, min_effect):
     diff = abs(position) - abs(yaw)
-    return diff > k * (se_position + se_yaw) and diff >= min_effect
+    return diff > k * diff_se and diff >= min_effect
 
 
 @claim("06.halves_cancel", "the two halves have opposite signs and their sum is less than a given share of their "
@@ -198,26 +201,32 @@ def halves_cancel(*, position, yaw, share):
     return position * yaw < 0 and abs(position + yaw) < share * (abs(position) + abs(yaw))
 
 
-@claim("06.error_size_shrank", "the size of the error, |position half| + |yaw half|, fell by more than k times the "
-       "bound on the standard error of the change and by at least the minimum effect")
-def error_size_shrank(*, first, first_bound, last, last_bound, k, min_effect):
-    drop = first - last
-    return drop > k * math.sqrt(first_bound ** 2 + last_bound ** 2) and drop >= min_effect
+@claim("06.error_size_shrank", "the size of the error, |position half| + |yaw half|, fell by more than k standard "
+       "errors of the change and by at least the minimum effect (the gap's own test: where the halves share a sign "
+       "the size is the gap's size and its standard error the gap's)", control="round 0")
+def error_size_shrank(*, first, first_se, last, last_se, k, min_effect):
+    return _size_fell(first, first_se, last, last_se, k, min_effect)
+
+
+@claim("06.error_size_grew", "the size of the error, |position half| + |yaw half|, rose by more than k standard "
+       "errors of the change and by at least the minimum effect", control="round 0")
+def error_size_grew(*, first, first_se, last, last_se, k, min_effect):
+    return _size_rose(first, first_se, last, last_se, k, min_effect)
 
 
 @claim("06.dream_rewards_expert", "the dream pays the scripted expert's actions more than zero actions, beyond k "
-       "standard errors and by at least the minimum effect: it recognises success")
+       "standard errors and by at least the minimum effect: it recognises success", control="zero actions")
 def dream_rewards_expert(*, signal, se, k, min_effect):
     return signal > k * se and signal >= min_effect
 
 
 @claim("06.dream_penalises_expert", "the dream pays the scripted expert's actions less than zero actions, beyond k "
-       "standard errors and by at least the minimum effect")
+       "standard errors and by at least the minimum effect", control="zero actions")
 def dream_penalises_expert(*, signal, se, k, min_effect):
     return signal < -k * se and -signal >= min_effect
 
 
-@claim("06.success_rose", "more real successes after the last round than in round 0")
+@claim("06.success_rose", "more real successes after the last round than in round 0", control="round 0")
 def success_rose_claim(*, before, after):
     return after > before
 
@@ -229,12 +238,22 @@ def untouched_block_on_table(*, final_dist, arena_half):
 
 
 @claim("06.fix_closed_gap", "the fix shrank the gap's size at both horizons (beyond k standard errors and the "
-       "minimum effect, not through zero) and its zero-action dream keeps the block on the table")
+       "minimum effect, not through zero), its drift did not change sign beyond the noise (the opposite error), and "
+       "its zero-action dream moves an untouched block no farther than the reference's does (by more than the "
+       "success tolerance)", control="the state model")
 def fix_closed_gap(*, first_tr, first_tr_se, last_tr, last_tr_se, first_ev, first_ev_se, last_ev, last_ev_se,
-                   k, min_effect, final_dist, arena_half):
+                   k, min_effect, drift_first, drift_first_se, drift_last, drift_last_se, moved, ref_moved, tol):
     return (_size_fell(first_tr, first_tr_se, last_tr, last_tr_se, k, min_effect)
             and _size_fell(first_ev, first_ev_se, last_ev, last_ev_se, k, min_effect)
-            and final_dist <= arena_half)
+            and not _crossed(drift_first, drift_first_se, drift_last, drift_last_se, k)
+            and moved <= ref_moved + tol)
+
+
+@claim("06.drift_crossed_zero", "the drift (zero-action dream minus zero-action reality) ended on the other side of "
+       "zero, beyond k standard errors at both ends: the model's error with nobody pushing turned into the opposite "
+       "one", control="round 0")
+def drift_crossed_zero(*, first, first_se, last, last_se, k):
+    return _crossed(first, first_se, last, last_se, k)
 
 
 @claim("06.no_real_success", "no run of this notebook (loop, delta model, ensemble) had a single real success")
@@ -340,15 +359,6 @@ def successes(m: dict) -> int:
     return int(round(m["real_success_rate"] * m["eval_episodes"]))
 
 
-def count_rise_p(before: int, after: int, n: int) -> float:
-    """Fisher's exact test, one-sided: the chance of ``after`` or more out of ``n`` if both rounds
-    had the same rate, given ``before + after`` events in all (hypergeometric tail)."""
-    total = before + after
-    denom = math.comb(2 * n, n)
-    return float(sum(math.comb(total, x) * math.comb(2 * n - total, n - x)
-                     for x in range(after, min(total, n) + 1)) / denom)
-
-
 @claim("06.count_change_beyond_chance", "a change of a count is beyond chance: Fisher's exact one-sided p below "
        "the bar")
 def count_beyond_chance(*, p, bar):
@@ -356,9 +366,17 @@ def count_beyond_chance(*, p, bar):
 
 
 def success_rose(rounds: list) -> bool:
-    """Exercise 3's "real success rises above 0%": more real successes after the last round than in
+    """Exercise 3's "real success rises": more real successes after the last round than in
     round 0 (a success is an event: one counts, see the module doc). Claim ``06.success_rose``."""
     return success_rose_claim(before=successes(rounds[0]), after=successes(rounds[-1]))
+
+
+@claim("06.ex3_letter_decided", "Exercise 3's letter is decided beyond the noise: the gap's size changed by well under "
+       "the minimum effect, or its change's |t| is more than 10% away from k", control="round 0")
+def ex3_letter_decided(*, first, first_se, last, last_se, k, min_effect):
+    drop = abs(first) - abs(last)
+    se = math.hypot(first_se, last_se)
+    return abs(drop) < (1 - THIN_MARGIN) * min_effect or clear_of_threshold(abs(drop) / se if se > 0 else math.inf, k)
 
 
 def ex3_verdict(rounds: list) -> str:
@@ -373,7 +391,15 @@ def ex3_reconciliation(rounds: list) -> tuple[str, str]:
     """Exercise 3's reconciliation, ``(measured letter, explanation)``, as notebook 06 hands them to
     ``pusht.predict.reconcile``: from the loop's rounds (``loop.run_loop(...).rounds``). One
     function, so that the notebook and ``python -m pusht.exercise ex3`` print the same words."""
-    return ex3_verdict(rounds), reconcile_text(rounds).replace("**", "")
+    c = gap_change(rounds)
+    drop = abs(c.first) - abs(c.last)
+    margin = margin_words(abs(drop) / c.se if c.se > 0 else math.inf, c.k)
+    decided = ex3_letter_decided(first=c.first, first_se=c.first_se, last=c.last, last_se=c.last_se, k=c.k,
+                                 min_effect=c.min_effect)
+    return ex3_verdict(rounds), (reconcile_text(rounds).replace("**", "")
+                                 + f"\n\nThe letter's margin (the gap's size, round 0 against round {rounds[-1]['round']}): "
+                                 f"{margin}." + ("" if decided else " This run does not decide the letter beyond the "
+                                                 "noise: more evaluation starts would."))
 
 
 # --- formatting ---------------------------------------------------------------------------------
@@ -476,27 +502,39 @@ def yaw_share(m: dict, span: str = "eval_horizon") -> float:
     return abs(y) / tot if tot > 0 else math.nan
 
 
-def halves_order(position: float, yaw: float, se_position: float, se_yaw: float, n_starts: int) -> str:
+def halves_order(position: float, yaw: float, diff_se: float, n_starts: int) -> str:
     """"yaw", "position" or "neither": which half of a gap is clearly the larger in size (claims
     ``06.yaw_half_clearly_larger``/``06.position_half_clearly_larger``): |yaw| - |position| beyond k
-    times se_position + se_yaw (a bound on the difference's standard error; the module doc says why)
-    and at least the minimum reward effect."""
-    kw = dict(position=position, yaw=yaw, se_position=se_position, se_yaw=se_yaw, k=k_for(int(n_starts)),
-              min_effect=MIN_REWARD_EFFECT)
+    times its standard error over the starts (``diff_se``, ``analysis.size_split``) and at least the
+    minimum reward effect."""
+    kw = dict(position=position, yaw=yaw, diff_se=diff_se, k=k_for(int(n_starts)), min_effect=MIN_REWARD_EFFECT)
     return "yaw" if yaw_half_clearly_larger(**kw) else "position" if position_half_clearly_larger(**kw) else "neither"
 
 
+def _diff_se(m: dict, span: str = "eval_horizon", what: str = "imagination_gap") -> float:
+    """The standard error over the starts of |yaw half| - |position half| of the gap (or, with
+    ``what="gap_drift"``, of the drift)."""
+    return m[f"{what}_yaw_minus_position_se_{span}"]
+
+
 def _order(m: dict, span: str = "eval_horizon") -> str:
-    p, pse, y, yse = _halves(m, span)
-    return halves_order(p, y, pse, yse, int(m["eval_episodes"]))
+    p, _, y, _ = _halves(m, span)
+    return halves_order(p, y, _diff_se(m, span), int(m["eval_episodes"]))
 
 
-def error_size(m: dict, span: str = "eval_horizon") -> tuple[float, float]:
+def error_size(m: dict, span: str = "eval_horizon", what: str = "imagination_gap") -> tuple[float, float]:
     """The size of the dream's error over ``span``, |position half| + |yaw half| of the gap (what a
-    gap near zero can hide when the halves cancel), and a bound on its standard error,
-    se_position + se_yaw."""
-    p, pse, y, yse = _halves(m, span)
-    return abs(p) + abs(y), pse + yse
+    gap near zero can hide when the halves cancel; ``what="gap_drift"``: of the drift), and its
+    standard error over the starts (``analysis.size_split``). Where the halves share a sign the size
+    is the gap's size and its standard error the gap's: one quantity, one test."""
+    return m[f"{what}_size_{span}"], m[f"{what}_size_se_{span}"]
+
+
+def size_change(a: dict, b: dict, span: str = "eval_horizon", what: str = "imagination_gap") -> Change:
+    """The size of the error (:func:`error_size`) from run ``a`` to run ``b``, against the minimum
+    reward effect, by the gap's own test (:func:`compare`)."""
+    (x, xs), (y, ys) = error_size(a, span, what), error_size(b, span, what)
+    return compare(x, xs, y, ys, int(b["eval_episodes"]), min_effect=MIN_REWARD_EFFECT)
 
 
 ORDER_WORDS = {"yaw": "the yaw half is the larger", "position": "the position half is the larger",
@@ -506,14 +544,12 @@ ORDER_WORDS = {"yaw": "the yaw half is the larger", "position": "the position ha
 def halves_rule(n_starts: int, short: bool = False) -> str:
     """The rule behind "the larger half", in one sentence (``short``: a parenthesis), for a reader."""
     if short:
-        return (f"A half counts as the larger only beyond k = {k_for(int(n_starts)):.2f} times se_position + "
-                f"se_yaw, a bound on the standard error of the difference, and by at least "
-                f"{MIN_REWARD_EFFECT:.2f}.")
+        return (f"A half counts as the larger only beyond k = {k_for(int(n_starts)):.2f} standard errors of "
+                f"the difference, and by at least {MIN_REWARD_EFFECT:.2f}.")
     return (f"A half counts as the larger only when its size exceeds the other's by more than k = "
-            f"{k_for(int(n_starts)):.2f} times se_position + se_yaw and by at least the minimum effect of "
-            f"{MIN_REWARD_EFFECT:.2f} per step; otherwise neither half is clearly the larger. The sum of the two "
-            "standard errors bounds the standard error of their difference from above (the metrics keep each "
-            "half's standard error, not how the two vary together), so this test is conservative.")
+            f"{k_for(int(n_starts)):.2f} standard errors of that difference (computed start by start, on the "
+            f"same starts) and by at least the minimum effect of {MIN_REWARD_EFFECT:.2f} per step; otherwise "
+            "neither half is clearly the larger.")
 
 
 def _cancel_words(p: float, y: float) -> str:
@@ -535,30 +571,66 @@ def halves_words(m: dict, span: str = "eval_horizon") -> str:
     +0.039, standard error at most 0.022): the yaw half is the larger" (:func:`halves_order`), with a
     note when the two halves pull opposite ways (:func:`_cancel_words`). The rule: :func:`halves_rule`."""
     p, pse, y, yse = _halves(m, span)
-    order = halves_order(p, y, pse, yse, int(m["eval_episodes"]))
+    dse = _diff_se(m, span)
+    order = halves_order(p, y, dse, int(m["eval_episodes"]))
     s = (f"{_pm(p, pse)} from the block's position and {_pm(y, yse)} from its yaw (|yaw| - |position| = "
-         f"{abs(y) - abs(p):+.3f}, standard error at most {_se(pse + yse)}): {ORDER_WORDS[order]}")
+         f"{abs(y) - abs(p):+.3f} ± {_se(dse)}): {ORDER_WORDS[order]}")
     return s + _cancel_words(p, y)
+
+
+EXPERT_CONTROL = register_expert_control("06")
 
 
 def expert_words(m: dict, span: str = "eval_horizon") -> tuple[str, str]:
     """The expert control in one run: ``(numbers, verdict)``. Does the dream pay the scripted
     expert's actions (which succeed in reality) more than zero actions? Claims
-    ``06.dream_rewards_expert`` and ``06.dream_penalises_expert``."""
+    ``06.dream_rewards_expert`` and ``06.dream_penalises_expert``, read only where the control is
+    valid (``06.zero_control_valid``: the zero-action dream leaves the untouched block in place);
+    the expert's own gap, dream minus reality, beside it."""
     n = int(m["eval_episodes"])
     k = k_for(n)
     d, dse = m[f"expert_signal_dream_{span}"], m[f"expert_signal_dream_se_{span}"]
     r, rse = m[f"expert_signal_real_{span}"], m[f"expert_signal_real_se_{span}"]
     nums = f"expert minus zero actions: dream {_pm(d, dse)}, reality {_pm(r, rse)} per step"
     kw = dict(signal=d, se=dse, k=k, min_effect=MIN_REWARD_EFFECT)
-    if dream_rewards_expert(**kw):
-        verdict = "the dream recognises success: it pays the expert's pushes more than standing still"
-    elif dream_penalises_expert(**kw):
-        verdict = "the dream does not recognise success: it pays the expert's pushes less than standing still"
+    rewards, penalises = dream_rewards_expert(**kw), dream_penalises_expert(**kw)
+    valid, control = expert_control_words(m, span, k, EXPERT_CONTROL)
+    if not valid:
+        verdict = control
+    elif rewards:
+        verdict = f"the dream recognises success: it pays the expert's pushes more than standing still. {control}"
+    elif penalises:
+        verdict = (f"the dream does not recognise success: it pays the expert's pushes less than standing still. "
+                   f"{control}")
     else:
         verdict = ("the dream does not tell the expert's pushes from standing still (not beyond the noise and "
-                   f"the minimum effect of {MIN_REWARD_EFFECT:.2f})")
+                   f"the minimum effect of {MIN_REWARD_EFFECT:.2f}). {control}")
     return nums, verdict
+
+
+def expert_short(m: dict, span: str = "eval_horizon") -> str:
+    """A round's expert control in a few words (the same claims as :func:`expert_words`)."""
+    k = k_for(int(m["eval_episodes"]))
+    kw = dict(signal=m[f"expert_signal_dream_{span}"], se=m[f"expert_signal_dream_se_{span}"], k=k,
+              min_effect=MIN_REWARD_EFFECT)
+    rewards, penalises = dream_rewards_expert(**kw), dream_penalises_expert(**kw)
+    moved = m[f"zero_dream_block_moved_{span}"]
+    if not EXPERT_CONTROL["valid"](moved=moved, tol=SUCCESS_POS):
+        return f"control invalid: the zero-action dream moves the untouched block {moved * 100:.0f} cm"
+    return ("pays them more than standing still" if rewards else "pays them less than standing still" if penalises
+            else "does not tell them from standing still")
+
+
+def path_words(values, fmt: str = "+.3f") -> str:
+    """The path of a per-round quantity, round to round: "round 0 -> 1: -0.080; 1 -> 2: +0.065; ...",
+    and whether it went one way throughout: a summary of the end points alone hides a path that
+    goes down and back up."""
+    steps = [b - a for a, b in zip(values, values[1:])]
+    if not steps:
+        return ""
+    s = "; ".join(f"{i} -> {i + 1}: {d:{fmt}}" for i, d in enumerate(steps))
+    one_way = all(d > 0 for d in steps) or all(d < 0 for d in steps)
+    return f"round to round, {s}" + ("" if one_way or len(steps) == 1 else " (not one way: the path turns)")
 
 
 # --- Exercise 3's reconciliation ------------------------------------------------------------------
@@ -597,6 +669,36 @@ def reopen_words(rounds: list, span: str = "eval_horizon") -> str:
             "larger beyond the noise and the minimum effect.")
 
 
+@claim("06.dream_fell_for_the_policy", "the dream's rating of the policy fell by more than its rating of a pusher "
+       "that never moves, beyond k standard errors of the difference and the minimum effect: the model learned "
+       "something about this policy, not only grew gloomier everywhere", control="zero actions")
+def dream_fell_for_the_policy(*, diff, se, k, min_effect):
+    return _test_outcome(diff, k * se, min_effect) == "down"
+
+
+def policy_specific_words(a: dict, b: dict, sd: dict) -> str:
+    """Did the model stop promising what THIS policy does not deliver, or did its whole dream grow gloomier?
+    The control is the zero-action dream: its rating's change from ``a`` to ``b`` is the drift's change
+    (reality's zero-action rating is the same on the same starts). The policy's dream fell specifically
+    when it fell by more than that, beyond k standard errors (the gap's change and the drift's change in
+    quadrature) and the minimum effect (claim ``06.dream_fell_for_the_policy``)."""
+    z0, z1 = a["zero_action_dream_return_per_step"], b["zero_action_dream_return_per_step"]
+    dz = float(z1 - z0)
+    c = fix_change(a, b)
+    dse = math.hypot(a["gap_drift_se_eval_horizon"], b["gap_drift_se_eval_horizon"])
+    se = math.hypot(c.se, dse)
+    diff = float(sd["dream"] - dz)
+    specific = dream_fell_for_the_policy(diff=diff, se=se, k=c.k, min_effect=c.min_effect)
+    nums = (f"The control, a pusher that never moves: the dream's rating of it went {z0:+.3f} -> {z1:+.3f} "
+            f"({dz:+.3f}); the policy's changed {sd['dream']:+.3f}, that is {diff:+.3f} beyond the control's change "
+            f"(± {_se(se)})")
+    if specific:
+        return (nums + ", beyond the noise and the minimum effect. The model stopped promising what this policy "
+                "does not deliver, which is not the same as the policy delivering more.")
+    return (nums + ", not beyond the noise and the minimum effect. The whole dream grew gloomier, standing still "
+            "included: that is not the model learning what this particular policy does not deliver.")
+
+
 def reconcile_text(rounds: list) -> str:
     """Exercise 3's measured outcome in words: the gap over the whole evaluation in round 0 and after
     the last round, its change against the noise and the minimum effect, round by round, from which
@@ -630,9 +732,8 @@ def reconcile_text(rounds: list) -> str:
     sd = sides(first, last)
     lines.append(_side_words(sd, "round 0", f"round {R}", first, last, "eval_horizon").strip())
     if cl["shrank"] and sd["moved"] == {"dream": "down", "real": "same"}:
-        lines.append("The dream came down to meet reality; reality did not rise to meet the dream. The model "
-                     "stopped promising what this policy does not deliver, which is not the same as the policy "
-                     "delivering more.")
+        lines.append("The dream came down to meet reality; reality did not rise to meet the dream. "
+                     + policy_specific_words(first, last, sd))
     elif cl["shrank"] and sd["moved"] == {"dream": "same", "real": "up"}:
         lines.append("Reality rose to meet the dream: the policy earns more in the real world, and the model's "
                      "rating of it did not move by that much.")
@@ -650,8 +751,7 @@ def reconcile_text(rounds: list) -> str:
     elif s0 == 0:
         succ += "Real success stayed at 0%."
     else:
-        succ += (f"Real success did not rise (the options assume 0% in round 0; here round 0 already had "
-                 f"{s0}/{n}).")
+        succ += f"Real success did not rise: round 0 already had {s0}/{n}, and the last round has no more."
     lines.append(succ)
     lines.append(f"So the measured answer is ({ex3_verdict(rounds)}).")
     return "\n".join(lines)
@@ -696,8 +796,8 @@ def rounds_table(rounds: list) -> str:
         rows.append("| " + " | ".join(cells) + " |")
     rows.append("")
     rows.append("Gaps are imagined minus real reward per step, ± one standard error over the evaluation starts; "
-                "dream and real are reward per step over the whole evaluation (pooled over every step of every "
-                "start, so the gap is exactly dream minus real); the four error columns are the world model's "
+                "dream and real are reward per step over the whole evaluation (each start's mean over the steps it "
+                "lasted, averaged over the starts, so the gap is exactly dream minus real); the four error columns are the world model's "
                 "RMSE on the policy's data (clips of that round's real evaluation rollouts, never trained on) "
                 "against copying the last frame. The gap's halves: the reward is a position term "
                 "plus a yaw term, and the gap splits exactly into the two. The expert signal: the scripted "
@@ -744,14 +844,7 @@ def rounds_sentence(rounds: list) -> str:
         one = (kinds - {"neither"}).pop()
         lines.append(f"Over {span} the {one} half is clearly the larger in {named(one)}, and neither half is clearly "
                      f"the larger in {named('neither')}: where one half is resolved, it is the same one.")
-    short = {}
-    for m in rounds:
-        n = int(m["eval_episodes"])
-        kw = dict(signal=m["expert_signal_dream_eval_horizon"], se=m["expert_signal_dream_se_eval_horizon"],
-                  k=k_for(n), min_effect=MIN_REWARD_EFFECT)
-        short[m["round"]] = ("pays them more than standing still" if dream_rewards_expert(**kw) else
-                             "pays them less than standing still" if dream_penalises_expert(**kw) else
-                             "does not tell them from standing still")
+    short = {m["round"]: expert_short(m) for m in rounds}
     per_e = "; ".join(f"round {m['round']}: {_pm(m['expert_signal_dream_eval_horizon'], m['expert_signal_dream_se_eval_horizon'])}"  # noqa: E501
                       f" ({short[m['round']]})" for m in rounds)
     reals = [_pm(m["expert_signal_real_eval_horizon"], m["expert_signal_real_se_eval_horizon"]) for m in rounds]
@@ -763,17 +856,35 @@ def rounds_sentence(rounds: list) -> str:
                  f"reality from {wins} of these starts. Its actions, replayed in the dream, minus zero actions, per "
                  f"step over {_steps(last, 'eval_horizon')}: {per_e}. In reality the same difference is {real}. A "
                  "dream counts as recognising success when it pays the expert's pushes more than standing still "
-                 f"by more than k standard errors and at least {MIN_REWARD_EFFECT:.2f} per step.")
+                 f"by more than k standard errors and at least {MIN_REWARD_EFFECT:.2f} per step, and only where "
+                 f"standing still stands still in the dream (the zero-action dream moves the untouched block at most "
+                 f"the {SUCCESS_POS * 100:.0f} cm success tolerance).")
+    valid = [EXPERT_CONTROL["valid"](moved=m["zero_dream_block_moved_eval_horizon"], tol=SUCCESS_POS)
+             for m in (first, last)]
     c = metric_change(first, last, "expert_signal_dream_eval_horizon", "expert_signal_dream_se_eval_horizon")
     d = c.direction()
-    lines.append(f"From round 0 to round {R} the dream's expert signal changed by {c.diff:+.3f} ± {_se(c.se)} "
-                 f"({_ratio_words(c)}; minimum effect {c.min_effect:.2f}): "
-                 + {"up": "the loop taught the model to pay the expert's pushes more, beyond the noise and the "
-                          "minimum effect.",
-                    "down": "the loop made the model pay the expert's pushes less, beyond the noise and the minimum "
-                            "effect.",
-                    "same": "the loop did not change what the model pays the expert's pushes, beyond the noise "
-                            "and the minimum effect."}[d])
+    path = path_words(_series(rounds, "expert_signal_dream_eval_horizon"))
+    head = (f"From round 0 to round {R} the dream's expert signal changed by {c.diff:+.3f} ± {_se(c.se)} "
+            f"({_ratio_words(c)}; minimum effect {c.min_effect:.2f})" + (f"; {path}" if path else ""))
+    if not all(valid):
+        g = metric_change(first, last, "expert_gap_eval_horizon", "expert_gap_se_eval_horizon")
+        gpath = path_words(_series(rounds, "expert_gap_eval_horizon"))
+        lines.append(head + ". That change cannot be read as the loop teaching the model about the expert's pushes: "
+                     "in round " + " and ".join(str(m["round"]) for m, v in zip((first, last), valid) if not v)
+                     + " the zero-action dream moves the untouched block beyond the success tolerance, so the "
+                     "control moves with the model. The expert's own gap, dream minus reality, which needs no such "
+                     f"control, went {first['expert_gap_eval_horizon']:+.3f} -> {last['expert_gap_eval_horizon']:+.3f}"
+                     f" ({g.diff:+.3f} ± {_se(g.se)}: "
+                     + {"up": "rose", "down": "fell", "same": "not changed"}[g.direction()]
+                     + " beyond the noise and the minimum effect" + (f"; {gpath}" if gpath else "") + ").")
+    else:
+        lines.append(head + ": "
+                     + {"up": "the loop taught the model to pay the expert's pushes more, beyond the noise and the "
+                              "minimum effect, against round 0.",
+                        "down": "the loop made the model pay the expert's pushes less, beyond the noise and the "
+                                "minimum effect, against round 0.",
+                        "same": "the loop did not change what the model pays the expert's pushes, beyond the noise "
+                                "and the minimum effect."}[d])
     return "\n\n".join(lines)
 
 
@@ -878,13 +989,13 @@ def model_error_sentence(rounds: list) -> str:
 
 
 @claim("06.model_better_on_policy_data", "from round 0 to the last round every error of the model on the policy's "
-       "data (one-step and open-loop, block and pusher) fell by more than 1 mm")
+       "data (one-step and open-loop, block and pusher) fell by more than 1 mm", control="round 0")
 def model_better_on_policy(*, firsts, lasts, res):
     return all(b < a - res for a, b in zip(firsts, lasts))
 
 
 @claim("06.model_worse_somewhere", "from round 0 to the last round at least one of these errors of the model rose by "
-       "more than 1 mm")
+       "more than 1 mm", control="round 0")
 def model_worse_somewhere(*, firsts, lasts, res):
     return any(b > a + res for a, b in zip(firsts, lasts))
 
@@ -1006,7 +1117,7 @@ def beats_copy_last_everywhere(*, ratios):
 
 
 @claim("06.model_moves_untouched_block", "with zero actions the dreamed block ends more than 5 mm nearer or farther "
-       "from the target than it spawned (a real untouched block does not move)")
+       "from the target than it spawned (a real untouched block does not move)", control="reality")
 def model_moves_untouched_block(*, final_dist, spawn_dist, tol):
     return abs(final_dist - spawn_dist) > tol
 
@@ -1018,7 +1129,7 @@ def pusher_left_table(*, err, arena):
 
 
 @claim("06.error_accumulates", "replaying the policy's real actions over the whole evaluation, the fix's dreamed "
-       "pusher ends farther off than the state model's")
+       "pusher ends farther off than the state model's", control="the state model")
 def error_accumulates(*, fix_err, ref_err):
     return fix_err > ref_err
 
@@ -1026,11 +1137,13 @@ def error_accumulates(*, fix_err, ref_err):
 def fix_verdict(ref: dict, fix: dict, name: str, ref_name: str) -> tuple[bool, str]:
     """Does ``fix`` count as a fix against ``ref``? Claim ``06.fix_closed_gap``: the gap's size shrank
     at both horizons, beyond k standard errors of the change and by at least ``MIN_REWARD_EFFECT``,
-    without crossing zero beyond the noise, and the fix's zero-action dream keeps the untouched block
-    on the table (``zero_action_dream_final_tee_dist`` at most ``ARENA_HALF``); and claim
-    ``06.error_size_shrank`` at both horizons: the size of the error, |position half| + |yaw half|
-    (:func:`error_size`), fell the same way, so halves that cancel do not pass for a fix. Returns the
-    verdict and a sentence with each condition's numbers."""
+    without crossing zero beyond the noise; the drift (the zero-action control) did not cross zero
+    beyond the noise (a model that now carries an untouched block away has traded one error for the
+    opposite one, and the gap can close by that trade alone); and the fix's zero-action dream moves
+    an untouched block no farther than the reference's does (``zero_dream_block_moved_eval_horizon``,
+    within the success tolerance); and claim ``06.error_size_shrank`` at both horizons: the size of the
+    error, |position half| + |yaw half| (:func:`error_size`), fell the same way, so halves that cancel do
+    not pass for a fix. Returns the verdict and a sentence with each condition's numbers."""
     parts = []
     changes = {}
     for span in SPAN_KEYS:
@@ -1039,25 +1152,31 @@ def fix_verdict(ref: dict, fix: dict, name: str, ref_name: str) -> tuple[bool, s
         cl = c.claims()
         parts.append(f"over {_steps(fix, span)} {c.first:+.3f} -> {c.last:+.3f} ± {_se(c.last_se)} "
                      f"({_change_words(c, cl)})")
+    tr, ev = changes["train_horizon"], changes["eval_horizon"]
+    d0, d0se = ref["gap_drift_eval_horizon"], ref["gap_drift_se_eval_horizon"]
+    d1, d1se = fix["gap_drift_eval_horizon"], fix["gap_drift_se_eval_horizon"]
+    flipped = drift_crossed_zero(first=d0, first_se=d0se, last=d1, last_se=d1se, k=ev.k)
+    moved, ref_moved = fix["zero_dream_block_moved_eval_horizon"], ref["zero_dream_block_moved_eval_horizon"]
     zd = fix["zero_action_dream_final_tee_dist"]
     on_table = untouched_block_on_table(final_dist=zd, arena_half=ARENA_HALF)
-    table = (f"with zero actions its dreamed block ends {zd:.3f} m from the target on average (it spawned "
-             f"{fix['spawn_tee_dist']:.3f} m away, and a real untouched block does not move), "
-             + ("within" if on_table else "farther than")
-             + f" the {ARENA_HALF:.1f} m from the target to the nearest wall")
-    tr, ev = changes["train_horizon"], changes["eval_horizon"]
+    table = (f"with zero actions its dream moves the untouched block {moved:.3f} m (the largest displacement of each "
+             f"start, averaged; {ref_name}'s moves it {ref_moved:.3f} m, a real untouched block not at all) and ends it "
+             f"{zd:.3f} m from the target (" + ("within" if on_table else "farther than")
+             + f" the {ARENA_HALF:.1f} m to the nearest wall); its drift went {_pm(d0, d0se)} -> {_pm(d1, d1se)}"
+             + (": it changed sign beyond the noise, the opposite error" if flipped else ""))
     closed = fix_closed_gap(first_tr=tr.first, first_tr_se=tr.first_se, last_tr=tr.last, last_tr_se=tr.last_se,
                             first_ev=ev.first, first_ev_se=ev.first_se, last_ev=ev.last, last_ev_se=ev.last_se,
-                            k=ev.k, min_effect=ev.min_effect, final_dist=zd, arena_half=ARENA_HALF)
+                            k=ev.k, min_effect=ev.min_effect, drift_first=d0, drift_first_se=d0se, drift_last=d1,
+                            drift_last_se=d1se, moved=moved, ref_moved=ref_moved, tol=SUCCESS_POS)
     sizes = []
     shrank_all = True
     for span in SPAN_KEYS:
         (a, ab), (b, bb) = error_size(ref, span), error_size(fix, span)
-        fell = error_size_shrank(first=a, first_bound=ab, last=b, last_bound=bb, k=ev.k, min_effect=ev.min_effect)
+        fell = error_size_shrank(first=a, first_se=ab, last=b, last_se=bb, k=ev.k, min_effect=ev.min_effect)
         shrank_all = shrank_all and fell
         sizes.append(f"over {_steps(fix, span)} {a:.3f} -> {b:.3f} ("
                      + ("fell" if fell else "did not fall") + " beyond the noise and the minimum effect: k = "
-                     f"{ev.k:.2f} times {math.sqrt(ab ** 2 + bb ** 2):.3f}, a bound on the change's standard error, "
+                     f"{ev.k:.2f} times {math.sqrt(ab ** 2 + bb ** 2):.3f}, the change's standard error, "
                      f"and {MIN_REWARD_EFFECT:.2f})")
     holds = closed and shrank_all
     verdict = (f"{name} counts as a fix of the gap" if holds else f"{name} does not count as a fix of the gap")
@@ -1065,8 +1184,9 @@ def fix_verdict(ref: dict, fix: dict, name: str, ref_name: str) -> tuple[bool, s
             "dream's error, |position half| + |yaw half|, which a gap near zero can hide when the halves cancel, "
             "went " + "; ".join(sizes) + ". A fix needs the gap's size to fall at both horizons, beyond the noise "
             f"and by at least {MIN_REWARD_EFFECT:.2f} per step, without crossing zero, the size of the error to fall "
-            "the same way (a gap that reaches zero by cancelling halves is not a fix), and a dream that keeps an "
-            "untouched block on the table.")
+            "the same way (a gap that reaches zero by cancelling halves is not a fix), a drift that does not turn "
+            "into the opposite error, and a dream that moves an untouched block no farther than "
+            f"{ref_name}'s does (within the {SUCCESS_POS * 100:.0f} cm success tolerance).")
     return holds, text
 
 
@@ -1267,9 +1387,10 @@ def _drift_words(m: dict, k: float) -> str:
     d, dse = m["gap_drift_eval_horizon"], m["gap_drift_se_eval_horizon"]
     p, y = m["gap_drift_position_eval_horizon"], m["gap_drift_yaw_eval_horizon"]
     pse, yse = m["gap_drift_se_position_eval_horizon"], m["gap_drift_se_yaw_eval_horizon"]
-    order = halves_order(p, y, pse, yse, int(m["eval_episodes"]))
+    order = halves_order(p, y, _diff_se(m, "eval_horizon", "gap_drift"), int(m["eval_episodes"]))
+    size, sse = error_size(m, "eval_horizon", "gap_drift")
     return (f"{_pm(d, dse)} per step (position {_pm(p, pse)}, yaw {_pm(y, yse)}: {ORDER_WORDS[order]}, by the rule "
-            "of the gap's halves above)")
+            f"of the gap's halves above; its size, |position| + |yaw|, {_pm(size, sse)})")
 
 
 def conclusion(rounds: list, state_m: dict, delta_m: dict, ens_m: dict) -> str:
@@ -1288,9 +1409,23 @@ def conclusion(rounds: list, state_m: dict, delta_m: dict, ens_m: dict) -> str:
         lines.append("**No fix produced a single real success.** Closing a gap is not solving the task: the gap "
                      "can close from the dream's side alone.")
     else:
-        won = [name for name, m in runs.items() if successes(m) > 0]
-        lines.append("Real successes appeared with " + ", ".join(f"{w} ({successes(runs[w])}/{n})" for w in won)
-                     + ": one seed and a few starts; rerun other seeds before calling it a fix.")
+        # a success counts against the fix's own reference (round 0, the state model), never against zero
+        refs = {"the loop": (first, "round 0"), "the delta model": (state_m, "the state model"),
+                "the ensemble": (state_m, "the single model")}
+        said = []
+        for w, m in runs.items():
+            ref, ref_name = refs[w]
+            a, b = successes(ref), successes(m)
+            if b == 0:
+                continue
+            if b > a:
+                p = count_rise_p(a, b, n)
+                said.append(f"{w} {b}/{n} against {a}/{n} for {ref_name} (Fisher's exact one-sided p = {p:.3f}, "
+                            + ("beyond chance)" if count_beyond_chance(p=p, bar=COUNT_P) else "could be chance)"))
+            else:
+                said.append(f"{w} {b}/{n}, no more than {ref_name}'s {a}/{n}: not something the fix bought")
+        lines.append("Real successes: " + "; ".join(said) + ". One seed and a few starts; rerun other seeds before "
+                     "calling any of it a fix.")
     k = k_for(n)
     open_ = [f"*Data the policy never collects.* The loop corrects the model only where its policy goes: after "
              f"round {R} the real block ends {last['real_final_tee_dist']:.3f} m from the target on average "
@@ -1325,10 +1460,20 @@ def conclusion(rounds: list, state_m: dict, delta_m: dict, ens_m: dict) -> str:
                    "target\" without the contact that causes it. ")
     else:
         causal += ". "
-    d = dc.direction()
-    causal += (f"After round {R} that drift is {_drift_words(last, k)}: "
-               + {"down": "it fell beyond the noise and the minimum effect. ",
-                  "up": "it rose beyond the noise and the minimum effect. ",
+    sc = size_change(first, last, "eval_horizon", "gap_drift")
+    kw = dict(first=sc.first, first_se=sc.first_se, last=sc.last, last_se=sc.last_se, k=sc.k,
+              min_effect=sc.min_effect)
+    flipped = drift_crossed_zero(first=dc.first, first_se=d0se, last=dc.last,
+                                 last_se=last["gap_drift_se_eval_horizon"], k=k)
+    d = ("flip" if flipped else "down" if error_size_shrank(**kw) else "up" if error_size_grew(**kw) else "same")
+    path = path_words(_series(rounds, "gap_drift_size_eval_horizon"))
+    causal += (f"After round {R} that drift is {_drift_words(last, k)}. Judged by its size, as the gap is (halves "
+               f"of opposite signs cancel in the signed drift), it went {sc.first:.3f} -> {sc.last:.3f}"
+               + (f" ({path})" if path else "") + ": "
+               + {"down": "it fell beyond the noise and the minimum effect, against round 0. ",
+                  "up": "it rose beyond the noise and the minimum effect, against round 0. ",
+                  "flip": "but the signed drift changed sign beyond the noise: the dream of a pusher that never "
+                          "moves went from too rosy to too gloomy, the opposite error, not a smaller one. ",
                   "same": "not changed beyond the noise and the minimum effect. "}[d])
     pc, ec = last["wm_policy_one_step_block_copy_err"], last["wm_expert_one_step_block_copy_err"]
     if d == "down" and pc < ec:

@@ -18,7 +18,7 @@ from ..env import SUCCESS_ANG, SUCCESS_POS, obs_to_pose
 from ..selfcheck import Question
 from . import figure
 from .claims import claim, finite
-from .stats import LEVEL, MIN_REWARD_EFFECT, k_for, welch
+from .stats import LEVEL, MIN_REWARD_EFFECT, count_rise_p, k_for, welch
 
 # The default config's number of held-out starts (cfg.eval_episodes), for metrics that do not say.
 DEFAULT_STARTS = 30
@@ -84,19 +84,35 @@ def real_success(*, success_rates):
     return any(r > 0 for r in success_rates)
 
 
+# One-sided bar for a count of real successes against the zero-action control's, as notebook 06's
+COUNT_P = (1 - LEVEL) / 2
+
+
+@claim("04.ex1_letter_decided", "Exercise 1's letter is decided beyond the noise: on every seed compared, the drift is "
+       "farther from half the gap than k of its standard errors", control="zero actions")
+def ex1_letter_decided(*, diffs, ses, ks):
+    return all(abs(d) > kk * se for d, se, kk in zip(diffs, ses, ks))
+
+
+@claim("04.real_success_beyond_chance", "on some seed the trained policy's real successes exceed those of a pusher "
+       "that never moves beyond chance (Fisher's exact test, one-sided p below the bar)", control="zero actions")
+def real_success_beyond_chance(*, trained, zero, n, bar):
+    return any(count_rise_p(int(z), int(t), int(k)) < bar for t, z, k in zip(trained, zero, n))
+
+
 @claim("04.gap_rosy", "the dream rates the trained policy well above reality (the whole evaluation's "
-       "gap beyond k standard errors and the minimum effect)")
+       "gap beyond k standard errors and the minimum effect)", control="reality")
 def gap_rosy(*, gap, se, k, min_effect):
     return _beyond(gap, se, k, min_effect)
 
 
 @claim("04.drift_half_of_gap", "zero actions are already rated well above reality by the dream, by "
-       "at least half of the trained policy's gap")
+       "at least half of the trained policy's gap", control="zero actions")
 def drift_half_of_gap(*, drift, se, gap, k, min_effect):
     return _beyond(drift, se, k, min_effect) and drift >= 0.5 * gap
 
 
-@claim("04.drift_half_on_means", "averaged over the seeds, the drift is at least half of the gap")
+@claim("04.drift_half_on_means", "averaged over the seeds, the drift is at least half of the gap", control="zero actions")
 def drift_half_on_means(*, drifts, gaps):
     return float(np.mean(drifts)) >= 0.5 * float(np.mean(gaps))
 
@@ -108,19 +124,19 @@ def dream_reproduces_package(*, mismatch):
 
 
 @claim("04.training_exploits", "within the actor's training horizon, training made the dream rosier "
-       "than it made reality, beyond k standard errors and the minimum effect: exploitation")
+       "than it made reality, beyond k standard errors and the minimum effect: exploitation", control="the untrained actor")
 def training_exploits(*, value, se, k, min_effect):
     return _beyond(value, se, k, min_effect)
 
 
 @claim("04.training_exploits_eval", "over the whole evaluation, training made the dream rosier than "
-       "it made reality, beyond k standard errors and the minimum effect")
+       "it made reality, beyond k standard errors and the minimum effect", control="the untrained actor")
 def training_exploits_eval(*, value, se, k, min_effect):
     return _beyond(value, se, k, min_effect)
 
 
 @claim("04.drift_rosy", "with the pusher standing still, the dream is rosier than reality within "
-       "the training horizon, beyond k standard errors and the minimum effect")
+       "the training horizon, beyond k standard errors and the minimum effect", control="reality")
 def drift_rosy(*, value, se, k, min_effect):
     return _beyond(value, se, k, min_effect)
 
@@ -137,27 +153,37 @@ def term_beyond_noise(*, value, se, k, what=""):
 
 
 @claim("04.dream_block_drifts_back", "the trained dream's block comes nearest inside the training "
-       "horizon, then ends more than 5 mm farther out")
+       "horizon, then ends more than 5 mm farther out", control="zero actions")
 def dream_block_drifts_back(*, t_min, horizon_s, d_min, d_end, near):
     return t_min <= horizon_s and d_end > d_min + near
 
 
 @claim("04.zero_dream_closer", "the zero-action dream gets the block nearer the target (by over 5 mm) "
-       "than the trained actor's dream ever does")
+       "than the trained actor's dream ever does", control="zero actions")
 def zero_dream_closer(*, zero_min, trained_min, near):
     return zero_min < trained_min - near
 
 
-@claim("04.dream_drifts_to_data_position", "with zero actions, the dreamed block ends nearer the "
-       "expert data's mean block position than the real (unmoved) block is, by over 5 mm")
-def dream_drifts_to_data_position(*, dream_to_mean, real_to_mean, near):
-    return dream_to_mean < real_to_mean - near
+# "Drifts toward" the data's typical pose means covering most of the way there: at least this share of
+# the real (unmoved) block's distance to it, and more than the success tolerance. A dream that covers 3 cm
+# of 14 moved, but it did not drift toward the typical pose; the sentence then says how far it went.
+DRIFT_SHARE = 0.5
 
 
-@claim("04.dream_drifts_to_data_yaw", "with zero actions, the dreamed block's yaw ends nearer the "
-       "expert data's mean yaw than the real (unmoved) block's, by over 10 degrees")
-def dream_drifts_to_data_yaw(*, dream_to_mean_deg, real_to_mean_deg, near_deg):
-    return dream_to_mean_deg < real_to_mean_deg - near_deg
+@claim("04.dream_drifts_to_data_position", "with zero actions, the dreamed block covers at least half of the "
+       "real (unmoved) block's distance to the expert data's mean block position, and more than the 2 cm success "
+       "tolerance", control="reality")
+def dream_drifts_to_data_position(*, dream_to_mean, real_to_mean, near, share=DRIFT_SHARE):
+    covered = real_to_mean - dream_to_mean
+    return covered > near and covered >= share * real_to_mean
+
+
+@claim("04.dream_drifts_to_data_yaw", "with zero actions, the dreamed block's yaw covers at least half of the "
+       "real (unmoved) block's angle to the expert data's mean yaw, and more than the 10 degree yaw tolerance",
+       control="reality")
+def dream_drifts_to_data_yaw(*, dream_to_mean_deg, real_to_mean_deg, near_deg, share=DRIFT_SHARE):
+    covered = real_to_mean_deg - dream_to_mean_deg
+    return covered > near_deg and covered >= share * real_to_mean_deg
 
 
 @claim("04.typical_pose_near_target", "the expert data's mean block pose is less than half as far "
@@ -167,7 +193,7 @@ def typical_pose_near_target(*, typical_dist, typical_yaw_deg, spawn_dist, spawn
 
 
 @claim("04.reality_pays_expert", "reality pays the scripted expert's pushes more than standing still, "
-       "beyond k standard errors and the minimum effect")
+       "beyond k standard errors and the minimum effect", control="zero actions")
 def reality_pays_expert(*, value, se, k, min_effect):
     return _beyond(value, se, k, min_effect)
 
@@ -178,44 +204,44 @@ def expert_solves_most(*, success_rate):
 
 
 @claim("04.dream_pays_expert", "the dream pays the scripted expert's pushes more than standing still, "
-       "beyond k standard errors and the minimum effect: a learnable signal existed")
+       "beyond k standard errors and the minimum effect: a learnable signal existed", control="zero actions")
 def dream_pays_expert(*, value, se, k, min_effect):
     return _beyond(value, se, k, min_effect)
 
 
 @claim("04.dream_penalises_expert", "the dream pays the scripted expert's pushes less than standing "
-       "still, beyond k standard errors and the minimum effect")
+       "still, beyond k standard errors and the minimum effect", control="zero actions")
 def dream_penalises_expert(*, value, se, k, min_effect):
     return _beyond(-value, se, k, min_effect)
 
 
 @claim("04.real_beats_zero", "in reality the trained policy earns more per step than zero actions, "
-       "beyond k standard errors and the minimum effect")
+       "beyond k standard errors and the minimum effect", control="zero actions")
 def real_beats_zero(*, diff, se, k, min_effect):
     return _beyond(diff, se, k, min_effect)
 
 
 @claim("04.real_worse_than_zero", "in reality the trained policy earns less per step than zero "
-       "actions, beyond k standard errors and the minimum effect")
+       "actions, beyond k standard errors and the minimum effect", control="zero actions")
 def real_worse_than_zero(*, diff, se, k, min_effect):
     return _beyond(-diff, se, k, min_effect)
 
 
 @claim("04.pusher_tracked_worse", "replaying the policy's real actions, the model's pusher is more "
-       "than 5 mm farther off than on held-out expert clips")
+       "than 5 mm farther off than on held-out expert clips", control="the scripted expert")
 def pusher_tracked_worse(*, policy_err, expert_err, near):
     return policy_err > expert_err + near
 
 
 @claim("04.pusher_tracked_worse_tested", "replaying the policy's real actions, the model's pusher is farther "
        "off than on held-out expert clips by more than k standard errors (Welch's t over the clips) and at "
-       "least 5 mm")
+       "least 5 mm", control="the scripted expert")
 def pusher_tracked_worse_tested(*, diff, se, k, min_effect):
     return _beyond(diff, se, k, min_effect)
 
 
 @claim("04.pusher_tracked_better_tested", "replaying the policy's real actions, the model's pusher is nearer "
-       "than on held-out expert clips by more than k standard errors (Welch's t over the clips) and at least 5 mm")
+       "than on held-out expert clips by more than k standard errors (Welch's t over the clips) and at least 5 mm", control="the scripted expert")
 def pusher_tracked_better_tested(*, diff, se, k, min_effect):
     return _beyond(-diff, se, k, min_effect)
 
@@ -226,9 +252,65 @@ def dream_ends_collapse(*, dream_spread, real_spread, near):
     return dream_spread < real_spread - near
 
 
-@claim("04.drift_most_every_seed", "on every seed compared, the drift is at least half of the gap")
+@claim("04.drift_most_every_seed", "on every seed compared, the drift is at least half of the gap", control="zero actions")
 def drift_most_every_seed(*, drifts, gaps):
     return all(d >= 0.5 * g for d, g in zip(drifts, gaps))
+
+
+# --- the expert control, and when it is valid (notebooks 04 and 06 register their own copies) ----------
+def register_expert_control(nb: str) -> dict:
+    """The claims of the expert control for notebook ``nb`` ("04", "06"): ``valid`` (the zero-action
+    dream leaves an untouched block within the success tolerance, so "more than standing still" compares
+    the expert with a pusher that stands still in the dream too), and the expert's own gap, which needs no
+    zero-action control: ``over`` (the dream pays the expert's pushes more than reality does) and ``under``
+    (less), each beyond k standard errors and the minimum effect."""
+    def valid(*, moved, tol):
+        return finite(moved, tol) and moved <= tol
+
+    def over(*, value, se, k, min_effect):
+        return _beyond(value, se, k, min_effect)
+
+    def under(*, value, se, k, min_effect):
+        return _beyond(-value, se, k, min_effect)
+
+    for f, tail in ((valid, "zero_control_valid"), (over, "dream_overpays_expert"), (under, "dream_underpays_expert")):
+        f.__name__ = f.__qualname__ = f"{tail}_{nb}"
+    return {
+        "valid": claim(f"{nb}.zero_control_valid", "with zero actions the dream moves the untouched block by at "
+                       "most the success tolerance (mean over the starts of its largest displacement in the span): "
+                       "the expert-minus-standing-still control is valid", control="zero actions")(valid),
+        "over": claim(f"{nb}.dream_overpays_expert", "the dream pays the scripted expert's own pushes more than "
+                      "reality pays them, beyond k standard errors and the minimum effect", control="reality")(over),
+        "under": claim(f"{nb}.dream_underpays_expert", "the dream pays the scripted expert's own pushes less than "
+                       "reality pays them, beyond k standard errors and the minimum effect", control="reality")(under),
+    }
+
+
+EXPERT_CONTROL = register_expert_control("04")
+
+
+def expert_control_words(m: dict, span: str, k: float, claims: dict = EXPERT_CONTROL) -> tuple[bool, str]:
+    """``(valid, words)``: is the expert-minus-zero-actions control valid over ``span`` (claims
+    ``*.zero_control_valid``), and, valid or not, the expert's own gap in words (claims
+    ``*.dream_overpays_expert``/``_underpays_expert``): the reading that needs no zero-action control."""
+    moved = m[f"zero_dream_block_moved_{span}"]
+    ok = claims["valid"](moved=moved, tol=SUCCESS_POS)
+    g, gse = m[f"expert_gap_{span}"], m[f"expert_gap_se_{span}"]
+    kw = dict(value=g, se=gse, k=k, min_effect=MIN_REWARD_EFFECT)
+    own = (f"the dream pays the expert's own pushes {g:+.3f} ± {gse:.3f} per step "
+           + ("more than reality pays them, beyond the noise and the minimum effect" if claims["over"](**kw) else
+              "less than reality pays them, beyond the noise and the minimum effect" if claims["under"](**kw) else
+              "against reality's pay, not beyond the noise and the minimum effect: about what reality pays"))
+    if ok:
+        return True, (f"With zero actions the dream moves the untouched block {moved * 100:.1f} cm at most on average "
+                      f"(within the {SUCCESS_POS * 100:.0f} cm success tolerance), so standing still stands still in "
+                      f"the dream too and the control is valid. Beside it, {own}.")
+    return False, (f"**This control is not valid on this run**: with zero actions the dream carries the untouched "
+                   f"block {moved * 100:.1f} cm on average (the largest displacement of each start, averaged), more "
+                   f"than the {SUCCESS_POS * 100:.0f} cm success tolerance, where a real untouched block does not "
+                   "move. \"More than standing still\" then compares the expert with a block the dream moves by "
+                   "itself, and cannot say whether the dream recognises success. The reading that needs no such "
+                   f"control: {own}.")
 
 
 def _term_args(m: dict, key: str, span: str, half: str = "") -> tuple[float, float]:
@@ -239,7 +321,7 @@ def _term_args(m: dict, key: str, span: str, half: str = "") -> tuple[float, flo
 
 # --- Exercise 1 ---------------------------------------------------------------------------------
 EX1_OPTIONS = {
-    "a": "It transfers: real successes appear.",
+    "a": "It transfers: real successes appear, more of them than a pusher that never moves gets by chance.",
     "b": "No real success, and the dream rates the trained policy well above reality; the rosy "
          "part comes with the actor's actions (a pusher that never moves would be rated about as "
          "reality rates it).",
@@ -291,7 +373,13 @@ def ex1_verdict(metrics: list[dict], n: int | None = None) -> str:
     k standard errors of the per-start gaps (:func:`k_se`, from ``n`` or each metrics'
     ``eval_episodes``) and at least ``MIN_REWARD_EFFECT``; a mixed result across seeds is decided
     on the seeds' means."""
-    if real_success(success_rates=[m["real_success_rate"] for m in metrics]):
+    # a lone success is an event, not a transfer: (a) needs more real successes than standing still gets,
+    # beyond chance, on some seed; the successes are counted either way (and the reconciliation prints them)
+    real_success(success_rates=[m["real_success_rate"] for m in metrics])
+    ns = [int(m.get("eval_episodes", n or DEFAULT_STARTS)) for m in metrics]
+    if real_success_beyond_chance(trained=[round(m["real_success_rate"] * k) for m, k in zip(metrics, ns)],
+                                  zero=[round(m["zero_action_real_success_rate"] * k) for m, k in zip(metrics, ns)],
+                                  n=ns, bar=COUNT_P):
         return "a"
     if not all([gap_rosy(gap=m["imagination_gap"], se=m["imagination_gap_se_eval_horizon"], k=_k(m, n),
                          min_effect=MIN_REWARD_EFFECT) for m in metrics]):
@@ -310,11 +398,15 @@ def ex1_verdict(metrics: list[dict], n: int | None = None) -> str:
 
 
 def ex1_sentence(seed: int, m: dict, n_eval: int) -> str:
+    won, zero = round(m["real_success_rate"] * n_eval), round(m["zero_action_real_success_rate"] * n_eval)
+    p = count_rise_p(zero, won, n_eval)
+    chance = ("" if won == 0 else f" (a pusher that never moves: {zero}/{n_eval}; Fisher's exact one-sided p = "
+              f"{p:.3f}, " + ("beyond chance" if p < COUNT_P else f"not beyond chance at {COUNT_P:.3f}") + ")")
     return (f"Seed {seed}: deployed, the policy earns {m['imagined_return_per_step']:+.3f} per step in the dream "
             f"and {m['real_return_per_step']:+.3f} in reality (gap {m['imagination_gap']:+.3f} ± "
             f"{m['imagination_gap_se_eval_horizon']:.3f}); with zero actions the dream is "
             f"{m['gap_drift_eval_horizon']:+.3f} ± {m['gap_drift_se_eval_horizon']:.3f} rosier than reality; "
-            f"{round(m['real_success_rate'] * n_eval)}/{n_eval} real successes.")
+            f"{won}/{n_eval} real successes{chance}.")
 
 
 def ex1_note(n: int | None = None) -> str:
@@ -327,8 +419,20 @@ def ex1_reconciliation(metrics: dict, n_eval: int) -> tuple[str, str]:
     ``pusht.predict.reconcile``: from ``{seed: evaluation metrics}`` (``two_world_eval``'s, with
     ``eval_episodes``) for the ``n_eval`` starts. One function, so that the notebook and
     ``python -m pusht.exercise ex1`` print the same words."""
+    # the letter turns on "the drift is at least half the gap": its margin, per seed, in the drift's own
+    # standard errors (drift minus half the gap, against k)
+    diffs = [m["gap_drift_eval_horizon"] - 0.5 * m["imagination_gap"] for m in metrics.values()]
+    ses = [m["gap_drift_se_eval_horizon"] for m in metrics.values()]
+    ks = [_k(m, n_eval) for m in metrics.values()]
+    decided = ex1_letter_decided(diffs=diffs, ses=ses, ks=ks)
+    margins = "; ".join(f"seed {s}: |t| = {abs(d) / se:.2f} against k = {k:.2f}"
+                        for s, d, se, k in zip(metrics, diffs, ses, ks))
     return (ex1_verdict(list(metrics.values())),
-            "\n".join(ex1_sentence(s, m, n_eval) for s, m in metrics.items()) + "\n" + ex1_note(n_eval))
+            "\n".join(ex1_sentence(s, m, n_eval) for s, m in metrics.items()) + "\n" + ex1_note(n_eval)
+            + "\nThe letter's margin (the drift minus half the gap, in the drift's standard errors): " + margins
+            + (": decided beyond the noise on every seed." if decided else
+               ": on some seed the drift is within the noise of half the gap, so that seed does not decide the "
+               "letter beyond the noise."))
 
 
 def dream_check_text(mismatch: float) -> str:
@@ -556,7 +660,10 @@ def split_story(m: dict, H: int, rollouts: dict | None = None, n: int | None = N
                     "is gloomier, against reality, than the untrained one's. ",
             "small": (": that advantage is gone from the whole run's mean, which is beyond the noise but smaller "
                       "than the minimum effect" + (" and below zero. " if tr_e < 0 else ". ")),
-            "none": ": that advantage is gone from the whole run's mean (within the noise). "}[re_]
+            "none": (": that advantage is not told apart from zero over the whole run (within the noise)"
+                     + (", though its point value is at least the minimum effect: not resolved, which is not the "
+                        "same as gone. " if abs(tr_e) >= MIN_REWARD_EFFECT else
+                        ", and smaller than the minimum effect: it does not last. "))}[re_]
     elif exploits_e:
         s += whole + (", clearly positive: the trained actor's dream turns rosy only after the steps its gradient "
                       "saw. ")
@@ -633,8 +740,12 @@ def dip_sentence(rollouts: dict, H: int, data_mean=None, dt: float = 0.1) -> str
     if dream_block_drifts_back(t_min=t_min, horizon_s=H * dt, d_min=d_min, d_end=end, near=NEAR):
         s += "After its best moment the trained dream's block drifts back out. "
     if zero_dream_closer(zero_min=z_min, trained_min=d_min, near=NEAR):
-        s += ("A pusher that never moves gets the dreamed block closer to the target than the trained "
-              "actor does: the model's drift, not the actor, brings the dream nearest to success. ")
+        yt = float(np.abs(_yaw_deg(rollouts["dream_trained"].obs[-1])).mean())
+        yz = float(np.abs(_yaw_deg(rollouts["dream_zero"].obs[-1])).mean())
+        s += ("In distance, a pusher that never moves gets the dreamed block closer to the target than the trained "
+              "actor does: the model's drift, not the actor, brings the dreamed block nearest the target's place. "
+              f"Distance is half the reward: at the end the trained dream's T is {yt:.0f}° off the target angle, "
+              f"the zero-action dream's {yz:.0f}°. ")
     if data_mean is None:
         return s
     # where does a dream with nobody pushing take the block? Toward the data's typical pose?
@@ -652,23 +763,26 @@ def dip_sentence(rollouts: dict, H: int, data_mean=None, dt: float = 0.1) -> str
           f"{float(rollouts['real_zero'].final_tee_dist.mean()):.3f} m from the target at {rz_err:.0f}° (means "
           f"over the starts); the dreamed one ends {float(rollouts['dream_zero'].final_tee_dist.mean()):.3f} m "
           f"away at {dz_err:.0f}°. ")
-    pos = dream_drifts_to_data_position(dream_to_mean=dream_to, real_to_mean=real_to, near=NEAR)
+    pos = dream_drifts_to_data_position(dream_to_mean=dream_to, real_to_mean=real_to, near=SUCCESS_POS)
     yaw = dream_drifts_to_data_yaw(dream_to_mean_deg=dream_yaw_to, real_to_mean_deg=real_yaw_to, near_deg=NEAR_DEG)
+    share = lambda a, b: f"{max(0.0, 1 - a / b):.0%} of the way" if b > 0 else "all the way"  # noqa: E731
     where_pos = (f"its position ends {dream_to:.3f} m from the data's mean block position, against "
-                 f"{real_to:.3f} m for the real block")
+                 f"{real_to:.3f} m for the real block ({share(dream_to, real_to)})")
     where_yaw = (f"its yaw ends {dream_yaw_to:.0f}° from the data's mean yaw, against {real_yaw_to:.0f}° "
-                 "for the real block")
+                 f"for the real block ({share(dream_yaw_to, real_yaw_to)})")
+    rule = (f"\"toward\" meaning at least {DRIFT_SHARE:.0%} of the way and more than the "
+            f"{SUCCESS_POS * 100:.0f} cm / {NEAR_DEG:.0f}° success tolerances")
     if pos and yaw:
-        s += (f"Left alone, the dreamed block drifts toward the data's typical pose, in position and in yaw: "
+        s += (f"Left alone, the dreamed block drifts toward the data's typical pose, in position and in yaw ({rule}): "
               f"{where_pos}, and {where_yaw}. A model that loses track of the block decodes it somewhere typical. ")
     elif pos or yaw:
         moved, stayed = ("position", "yaw") if pos else ("yaw", "position")
         s += (f"Left alone, the dreamed block drifts toward the data's typical {moved} "
               f"({where_pos if pos else where_yaw}) but not toward its typical {stayed} "
-              f"({where_yaw if pos else where_pos}). ")
+              f"({where_yaw if pos else where_pos}; {rule}). ")
     else:
-        s += (f"The dreamed block does not drift toward the data's typical pose: {where_pos}, and {where_yaw}; "
-              "its drift goes somewhere else. ")
+        s += (f"The dreamed block does not drift toward the data's typical pose ({rule}): {where_pos}, and "
+              f"{where_yaw}; its drift goes somewhere else. ")
     if pos or yaw:
         spawn_dist = float(rollouts["real_zero"].final_tee_dist.mean())
         if typical_pose_near_target(typical_dist=t_dist, typical_yaw_deg=t_yaw, spawn_dist=spawn_dist,
@@ -717,21 +831,28 @@ def expert_text(m: dict, steps: dict, n: int | None = None) -> str:
     else:
         s += (f"Within the first {H} steps even reality does not reward the expert's pushes over standing still "
               "beyond the noise and the minimum effect: those steps are too few to tell success apart. ")
-    if dream_pays_expert(value=dv, se=dse, k=k, min_effect=MIN_REWARD_EFFECT):
+    valid, control = expert_control_words(m, "train_horizon", k)
+    pays = dream_pays_expert(value=dv, se=dse, k=k, min_effect=MIN_REWARD_EFFECT)
+    penalises = dream_penalises_expert(value=dv, se=dse, k=k, min_effect=MIN_REWARD_EFFECT)
+    small = not pays and not penalises and reading(dv, dse, k, "expert dream train_horizon") == "small"
+    if not valid:
+        s += (f"In the dream the expert's pushes minus zero actions read {dv:+.3f} ± {dse:.3f} per step over the "
+              f"first {H} steps. {control}")
+    elif pays:
         s += ("**The dream does too**" + (": it can recognise success." if solves else ".")
               + " An actor that pushed the way the expert pushes would have been paid for it in its training "
-              "dreams: a learnable signal existed.")
-    elif dream_penalises_expert(value=dv, se=dse, k=k, min_effect=MIN_REWARD_EFFECT):
+              f"dreams: a learnable signal existed. {control}")
+    elif penalises:
         s += ("**The dream pays the expert's pushes less than standing still.** An actor that copied the expert "
               "exactly would have scored *worse* in its training dreams than one that never moved: the dream's "
-              f"reward did not lead toward {pushes}, so imitating the expert was never what it asked for.")
-    elif reading(dv, dse, k, "expert dream train_horizon") == "small":
+              f"reward did not lead toward {pushes}, so imitating the expert was never what it asked for. {control}")
+    elif small:
         s += ("**The dream does not tell the expert's pushes apart from standing still by enough to matter**: its "
               f"difference is beyond the noise, but {'above' if dv > 0 else 'below'} zero by less than the minimum "
-              "effect that matters. The signal an actor would need to learn the task is too small to count.")
+              f"effect that matters. The signal an actor would need to learn the task is too small to count. {control}")
     else:
         s += ("**The dream does not tell the expert's pushes apart from standing still** (within the noise): "
-              "the signal an actor would need to learn the task is not there.")
+              f"the signal an actor would need to learn the task is not there. {control}")
     s += f" (Each verdict: {test_words(k)}.)"
     return s
 
@@ -788,12 +909,17 @@ def company_text(m: dict, H: int, n: int | None = None) -> str:
              f"made the dream rosier than reality by {tr:+.3f} ± {tse:.3f} per step. ")
     else:
         r = reading(tr, tse, k, "training train_horizon, company")
-        s = (f"**On your run** the gap is not the actor's exploitation: within the {H} steps its gradient saw, "
+        s = (f"**On your run**, within the {H} steps its gradient saw, the gap is not the actor's exploitation: "
              f"training's part is {tr:+.3f} ± {tse:.3f} per step, " + {
                  "down": "clearly negative. ",
                  "small": "beyond the noise but smaller than the minimum effect that matters. ",
                  "none": "within the noise. ", "up": ""}[r]
              + f"(It would count when {test_words(k)}.) ")
+        te, tese = m["gap_training_eval_horizon"], m["gap_training_se_eval_horizon"]
+        if training_exploits_eval(value=te, se=tese, k=k, min_effect=MIN_REWARD_EFFECT):
+            s += (f"Over the whole evaluation, though, training's part is {te:+.3f} ± {tese:.3f}, clearly positive: "
+                  "past the steps its gradient saw, the trained actor's dream is rosier against reality than the "
+                  "untrained one's, so part of the headline gap is training's. ")
     if drift_rosy(value=dr, se=dse, k=k, min_effect=MIN_REWARD_EFFECT):
         s += (f"The dream is rosy even with nobody pushing ({dr:+.3f} ± {dse:.3f} over the same steps): an actor "
               "trained in it is graded on a model that flatters doing nothing, and the remedies above are about "
@@ -881,6 +1007,9 @@ SEED_COLUMNS = [("imagination_gap", "gap", "+.3f"),
                 ("gap_drift_eval_horizon", "drift", "+.3f"), ("gap_training_eval_horizon", "training", "+.3f"),
                 ("gap_training_train_horizon", "training, training horizon", "+.3f"),
                 ("expert_signal_dream_train_horizon", "dream pays the expert, training horizon", "+.3f"),
+                ("zero_dream_block_moved_train_horizon", "zero-action dream moves the block (m), training horizon",
+                 ".3f"),
+                ("expert_gap_train_horizon", "expert's own gap, training horizon", "+.3f"),
                 ("real_pusher_at_wall_share", "real steps at a wall", ".0%"),
                 ("real_final_tee_dist", "real tee-dist (m)", ".3f"), ("spawn_tee_dist", "spawn (m)", ".3f"),
                 ("real_success_rate", "real success", ".0%")]

@@ -107,6 +107,11 @@ class Test:
         """At least the minimum effect that matters (whatever the noise)."""
         return abs(self.diff) >= self.min_effect and self.diff != 0
 
+    def margin_words(self) -> str:
+        """How far the test's decision is from the noise threshold, for an exercise's letter: |t| over k,
+        and "thin" when it is within :data:`THIN_MARGIN` of 1 (another run could decide it the other way)."""
+        return margin_words(self.ratio, self.k)
+
     def why(self) -> str:
         """The test in words: which test, t and k, and the minimum effect, for a verdict's reader."""
         t = "many" if math.isinf(self.ratio) else f"{self.ratio:.2f}"
@@ -115,6 +120,29 @@ class Test:
         if self.min_effect > 0:
             s += f"; minimum effect that matters {self.min_effect:.3f}"
         return s
+
+
+# An exercise's letter hangs on a thin margin when |t| / k is within 10% of 1: at that distance a rerun
+# on other seeds or starts moves t across k about as often as not.
+THIN_MARGIN = 0.10
+
+
+def clear_of_threshold(ratio: float, k: float) -> bool:
+    """|t| (``ratio``) is more than :data:`THIN_MARGIN` away from ``k``, on either side: the decision is not
+    one a rerun would flip about as often as not."""
+    return math.isinf(ratio) or (k > 0 and abs(ratio / k - 1) > THIN_MARGIN)
+
+
+def margin_words(ratio: float, k: float) -> str:
+    """"decided with margin: |t| = 4.10, 1.9 times k = 2.18" or "a thin margin: ..." (``ratio`` = |t|)."""
+    if math.isinf(ratio):
+        return f"decided with margin: the values agree exactly, |t| is unbounded against k = {k:.2f}"
+    r = ratio / k if k > 0 else math.inf
+    words = (f"|t| = {ratio:.2f} is {r:.2f} times k = {k:.2f}")
+    if abs(r - 1) <= THIN_MARGIN:
+        return (f"a thin margin: {words}, within {THIN_MARGIN:.0%} of the threshold, so a rerun could decide the "
+                "letter the other way")
+    return f"decided with margin: {words} ({'beyond' if r > 1 else 'short of'} the threshold by over {THIN_MARGIN:.0%})"
 
 
 def _values(x) -> np.ndarray:
@@ -132,10 +160,27 @@ def sign_test(values, level: float = LEVEL, min_effect: float = 0.0) -> Test:
     """
     v = _values(values)
     se = float(v.std(ddof=1) / np.sqrt(v.size))
+    if se <= 1e-12 * max(1.0, float(np.abs(v).max())):      # the values agree to rounding: no spread at all
+        se = 0.0
     df = v.size - 1.0
     k = t_quantile(df, level)
     mean = float(v.mean())
     return Test(mean, se, df, k, outcome(mean, k * se, min_effect), min_effect, "one-sample t-test")
+
+
+def paired(short, long, level: float = LEVEL, min_effect: float = 0.0) -> Test:
+    """Did a quantity change between two conditions measured on the SAME actor seeds (``short[i]`` and
+    ``long[i]`` share seed i)? The one-sample t-test of the per-seed differences ``long - short``, n - 1
+    degrees of freedom. Whatever each seed adds to both conditions alike cancels in its difference; in
+    notebook 05 the gap is drift + motion + training with drift the same in every run and motion the same
+    for one actor seed at every horizon, so the gap's change and the training term's change are, seed by
+    seed, the same number, and this test gives them one verdict (Welch's test, which ignores the pairing,
+    gave them two)."""
+    a, b = _values(short), _values(long)
+    if a.size != b.size:
+        raise ValueError(f"a paired test needs the same seeds on both sides, got {a.size} and {b.size} values")
+    t = sign_test(b - a, level, min_effect)
+    return Test(t.diff, t.se, t.df, t.k, t.outcome, t.min_effect, "paired t-test over actor seeds")
 
 
 def welch(short, long, level: float = LEVEL, min_effect: float = 0.0) -> Test:
@@ -155,3 +200,12 @@ def welch(short, long, level: float = LEVEL, min_effect: float = 0.0) -> Test:
     k = t_quantile(df, level)
     diff = float(b.mean() - a.mean())
     return Test(diff, se, df, k, outcome(diff, k * se, min_effect), min_effect, "Welch's t-test")
+
+
+def count_rise_p(before: int, after: int, n: int) -> float:
+    """Fisher's exact test, one-sided: the chance of ``after`` or more out of ``n`` if both rounds
+    had the same rate, given ``before + after`` events in all (hypergeometric tail)."""
+    total = before + after
+    denom = math.comb(2 * n, n)
+    return float(sum(math.comb(total, x) * math.comb(2 * n - total, n - x)
+                     for x in range(after, min(total, n) + 1)) / denom)

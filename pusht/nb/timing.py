@@ -48,9 +48,32 @@ def estimate(notebook: str, path: Path = TIMES) -> str:
     ex = "".join(f"; Exercise {k[2:]}'s experiment cell about {_minutes(v)}" for k, v in rec["exercises"].items())
     return (f"**Time:** about **{_minutes(rec['seconds'])}** of computing to run top to bottom at the default "
             f"config{ex}, measured on {data['host']} ({data['measured_at'][:10]}, commit {data['commit']}), "
-            "running the notebooks in order so that each reuses the models the earlier ones trained and "
-            "cached. More cores train seeds side by side and go faster; `SMOKE = True` runs in seconds. "
-            "Your own reading and writing time comes on top.")
+            "with nothing else running on it, and running the notebooks in order so that each reuses the models "
+            "the earlier ones trained and cached. That is a quiet machine's figure. On a busy or shared one (a "
+            "class server, a laptop compiling something, a free Colab runtime on shared hardware) it takes "
+            "longer: the training here is arithmetic on the CPU, and every other program that wants those cores "
+            "takes its share of them (one busy program per core roughly halves what the notebook gets). More "
+            "cores train seeds side by side and go faster; `SMOKE = True` runs in seconds. Your own reading "
+            "and writing time comes on top.")
+
+
+def here() -> str:
+    """"on this machine (Intel Xeon, 2 cores)": where a time printed in a notebook was measured, since a
+    wall-clock time means nothing without its machine (and what else was running on it)."""
+    import os
+    import platform
+
+    cpu = ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    cpu = cpu or platform.processor() or platform.machine() or "unknown CPU"
+    n = os.cpu_count() or 1
+    return f"on this machine ({cpu}, {n} core{'s' if n != 1 else ''}, with whatever else runs on it)"
 
 
 def time_note(notebook: str):

@@ -379,6 +379,12 @@ ask(SELF_CHECKS["two_horizons"], "")
 # expert's pushes more than standing still, an actor that found those pushes would have been
 # rewarded for them: the dream held a learnable signal. If it pays them no more, or less, the
 # dream's reward gives an actor no reason to push that way.
+#
+# A control is only as good as its own stillness: "more than standing still" means something only
+# if, in the dream, standing still leaves the block where it is. Where the zero-action dream carries
+# a block nobody touches beyond the 2 cm success tolerance, the comparison is reported as invalid,
+# and the text reads the expert's own gap instead: what the dream pays the expert's pushes against
+# what reality pays the very same pushes.
 
 # %%
 fig = nb04.fig_expert_control(hm, steps)
@@ -428,7 +434,9 @@ ask(SELF_CHECKS["shift"], "")
 # One more seed, and the numbers side by side (the package's own evaluation; the two seeds of
 # Exercise 1 were trained above, so they come from memory). The yaw columns split the gap as
 # above; the expert column is how much more than standing still the dream pays the scripted
-# expert's pushes over the training horizon.
+# expert's pushes over the training horizon, valid only where the next column (how far the
+# zero-action dream moves a block nobody touches) is within 2 cm; the column after it is the
+# expert's own gap, dream minus reality, which needs no such control.
 
 # %%
 seed_runs = {s: run_seed(s) for s in tqdm(SEEDS, desc="seeds", leave=False)}

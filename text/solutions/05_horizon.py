@@ -83,7 +83,7 @@ print(f"config: world model of seed {cfg.seed}, {cfg.imag_iters} policy updates 
       f"{cfg.eval_episodes} held-out starts of {cfg.eval_horizon} steps" + ("  [SMOKE: tiny config]" if cfg.smoke else ""))
 
 # %%
-from pusht.nb.timing import time_note
+from pusht.nb.timing import here, time_note
 
 time_note("05_horizon")   # how long this notebook takes, measured (make times)
 
@@ -114,13 +114,13 @@ ask(SELF_CHECKS["same_model"], "")
 # ## Exercise 2 · Predict, then run
 #
 # We train the actor with three imagination horizons, **5, 15 and 30 steps** (0.5, 1.5 and 3 s of
-# dreamed time per update), and at each horizon with three actor seeds (0, 1, 2), all on the
-# **same frozen world model** of seed `SEED`. Every one of the nine policies is then evaluated the
+# dreamed time per update), and at each horizon with four actor seeds (0, 1, 2, 3), all on the
+# **same frozen world model** of seed `SEED`. Every one of the twelve policies is then evaluated the
 # same way, in the dream and in reality.
 #
 # The number to predict is the **imagination gap**: imagined minus real reward per step over the
 # whole evaluation. Positive means the dream rates the policy above what reality pays it; negative
-# means below. The three actors at one horizon give a spread: how much the gap moves when nothing
+# means below. The four actors at one horizon give a spread: how much the gap moves when nothing
 # changes but the actor's seed. A change with the horizon counts only if it is larger than that
 # spread allows **and** at least a minimum effect that matters (the rule is printed with the options
 # below; the function that applies it is shown after the run). The letter is decided by the shortest horizon
@@ -156,7 +156,7 @@ receipt = lock_prediction("ex2", PREDICTION, REASON)
 # stays the same.
 
 # %% [markdown]
-# The sweep: three horizons times three actor seeds. Each run loads the world model of `SEED` from
+# The sweep: three horizons times four actor seeds. Each run loads the world model of `SEED` from
 # the cache (an earlier notebook may have left it there; otherwise one run trains it first and the
 # others wait for it) and trains only its actor-critic; a run that an earlier notebook already
 # trained with the same config is loaded too. The runs do not depend on each other, so
@@ -164,7 +164,7 @@ receipt = lock_prediction("ex2", PREDICTION, REASON)
 # every run gives exactly the numbers it gives on its own; only the wall-clock time changes.
 
 # %%
-EX2_HORIZONS, EX2_ACTOR_SEEDS = [5, 15, 30], [0, 1, 2]
+EX2_HORIZONS, EX2_ACTOR_SEEDS = [5, 15, 30], [0, 1, 2, 3]
 if GRADING:     # the autograder needs the cells to run, not the spread: the two ends, two seeds each
     EX2_HORIZONS, EX2_ACTOR_SEEDS = [5, 30], [0, 1]
 
@@ -182,7 +182,7 @@ def experiment_ex2(horizons, actor_seeds):
 
 t0 = time.perf_counter()
 sweep = run_exercise("ex2", experiment_ex2, EX2_HORIZONS, EX2_ACTOR_SEEDS)
-print(f"{len(sweep)} runs" + ("" if GRADING else f" in {time.perf_counter() - t0:.0f} s"))   # no wall-clock times in graded feedback
+print(f"{len(sweep)} runs" + ("" if GRADING else f" in {time.perf_counter() - t0:.0f} s {here()}"))   # no wall-clock times in graded feedback
 
 # %%
 n_eval = cfg.eval_episodes
@@ -205,8 +205,10 @@ display(Markdown(nb05.interval_note(len(EX2_ACTOR_SEEDS))))
 #
 # Every verdict below asks two things, and says which test it used and what it found:
 #
-# * **beyond the noise**: a t-test on the per-seed values (Welch's, for two horizons; a one-sample
-#   t-test, for "differs from zero"). The difference must exceed `k` standard errors, where the
+# * **beyond the noise**: a t-test on the per-seed values (for two horizons, paired by actor seed:
+#   every horizon trains the same actor seeds, so seed 0 at 5 steps is compared with seed 0 at 30
+#   steps, and what a seed brings to both cancels; a one-sample t-test, for "differs from zero"). The
+#   difference must exceed `k` standard errors, where the
 #   standard error comes from the spread across actor seeds and `k` is Student's t at the test's
 #   degrees of freedom: if nothing had changed, a difference that large would turn up in about one
 #   sweep in 20. Each verdict prints `|t|` (the difference in standard errors) beside `k`.
@@ -264,15 +266,19 @@ display(Markdown(nb05.rule_text(len(EX2_ACTOR_SEEDS)) + "\n\n"
 # %% [markdown]
 # Step by step: the mean distance of the block from the target over the evaluation, in the dream
 # (solid) and in reality (dashed), for each horizon. The dotted lines mark where each horizon's
-# training dreams ended.
+# training dreams ended. The black lines are the control: a pusher that never moves, from the same
+# starts. Whatever the dream does to that block, it does without any pushing.
 
 # %%
 curves = {h: {w: np.stack([nb05.mean_block_distance(sweep[h, a].rollouts[w]) for a in EX2_ACTOR_SEEDS])
               for w in ("dream", "real")} for h in EX2_HORIZONS}
-fig = nb05.fig_block_over_time(curves)
+run0 = next(iter(sweep.values()))               # zero actions: the same rollouts in every run
+zero = {w: nb05.mean_block_distance(run0.rollouts[f"{w}_zero"]) for w in ("dream", "real")}
+fig = nb05.fig_block_over_time(curves, zero=zero)
 show(fig, "05_block_over_time.png")
 spawn = float(np.mean([m["spawn_tee_dist"] for m in M.values()]))
-text = nb05.block_sentence(by("imagined_final_tee_dist"), by("real_final_tee_dist"), spawn, curves)
+text = nb05.block_sentence(by("imagined_final_tee_dist"), by("real_final_tee_dist"), spawn, curves,
+                           zero_final=m0["zero_action_dream_final_tee_dist"])
 if PAGE.get("horizon_sweep_5_vs_30"):
     text += (f"\n\nFor comparison, the chapter page summarises its own 5-versus-30 sweep as: "
              f"*{PAGE['horizon_sweep_5_vs_30']}*. The numbers above are what this run measured.")

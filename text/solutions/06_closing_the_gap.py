@@ -97,7 +97,7 @@ print(f"config: seed {cfg.seed}; the loop runs {cfg.loop_rounds} rounds of {cfg.
       f"held-out starts" + ("  [SMOKE: tiny config]" if cfg.smoke else ""))
 
 # %%
-from pusht.nb.timing import time_note
+from pusht.nb.timing import here, time_note
 
 time_note("06_closing_the_gap")   # how long this notebook takes, measured (make times)
 
@@ -199,7 +199,7 @@ result = run_exercise("ex3", experiment_ex3, cfg)
 rounds = result.rounds
 loop.save_loop(result, METRICS / f"loop_seed{cfg.seed}")
 print(f"{len(rounds) - 1} rounds" + ("" if GRADING else   # no wall-clock times in graded feedback
-      f" in {time.perf_counter() - t0:.0f} s (round 0 included when not cached)"))
+      f" in {time.perf_counter() - t0:.0f} s {here()} (round 0 included when not cached)"))
 
 # %%
 display(Markdown(nb06.rounds_table(rounds)))
