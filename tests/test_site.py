@@ -1,6 +1,8 @@
 """The chapter site's parts, without a browser (tests/test_site_browser.py opens the built site).
 
 * the scrubber's export trains the chapter's own actor again and its last frame is that actor;
+* its evaluation over training is the headline's: the last kept iteration gives the run's own
+  imagined and real reward per step, the first the untrained controls';
 * the colophon finds every region the notebooks show and fingerprints exactly the shown text;
 * the wall-clock table says "pending" for a tier never measured and never invents a figure;
 * a published notebook page carries the student release's code, never a solution, and no run paths;
@@ -16,6 +18,7 @@ import re
 from pathlib import Path
 
 import nbformat
+import numpy as np
 import pytest
 import yaml
 
@@ -27,9 +30,14 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
-def smoke_export(tmp_path_factory):
+def smoke_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("run")
-    return json.loads(export(out, smoke=True, log=None).read_text())
+    return out, json.loads(export(out, smoke=True, log=None).read_text())
+
+
+@pytest.fixture(scope="module")
+def smoke_export(smoke_run):
+    return smoke_run[1]
 
 
 def test_scrubber_export_is_the_chapters_actor_at_every_kept_iteration(smoke_export):
@@ -45,6 +53,36 @@ def test_scrubber_export_is_the_chapters_actor_at_every_kept_iteration(smoke_exp
             assert all(abs(v) <= 2000 for xy in w["pusher_mm"] for v in xy)    # millimetres, on or near the table
     assert d["curves"]["real_floor"]["x"] == iters
     assert d["config"] == "smoke" and d["seed"] == 0
+    for f in d["frames"]:
+        e = f["eval"]
+        assert len(e["imagined_per_start"]) == len(e["real_per_start"]) == d["eval_starts"]
+        assert e["imagined_return_per_step"] == pytest.approx(np.mean(e["imagined_per_start"]), abs=1e-5)
+        assert e["imagination_gap"] == pytest.approx(e["imagined_return_per_step"] - e["real_return_per_step"], abs=2e-6)
+        # the scrubber's start is the first of the evaluation's starts, from the same rollout
+        assert f["real"]["reward_per_step"] == e["real_per_start"][0]
+        for world in ("dream", "real"):
+            w = f[world]
+            moved = np.linalg.norm(np.subtract(w["block_mm_deg"][-1][:2], w["block_mm_deg"][0][:2])) / 1000
+            assert w["block_moved_m"] == pytest.approx(moved, abs=0.0015)     # mm rounding of both ends
+            assert 0 <= w["pusher_at_wall_share"] <= 1
+
+
+def test_evaluation_over_training_is_the_headline_evaluation(smoke_run):
+    """The chart's last point is the run's own two-world evaluation (what the headline shows), and
+    its first is that evaluation's untrained control: the same starts, horizon and calls."""
+    from pusht.config import make_config
+    from pusht.dreamer import run
+
+    out, d = smoke_run
+    m = run(make_config(smoke=True, seed=0, out=out), cache_dir=out / "cache", model_cache=out / "cache",
+            log=None).metrics
+    first, last = d["frames"][0]["eval"], d["frames"][-1]["eval"]
+    assert d["eval_starts"] == m["eval_episodes"] and d["horizon"] == m["eval_horizon"]
+    assert last["imagined_return_per_step"] == pytest.approx(m["imagined_return_per_step"], abs=1e-6)
+    assert last["real_return_per_step"] == pytest.approx(m["real_return_per_step"], abs=1e-6)
+    assert last["real_success_rate"] == m["real_success_rate"]
+    assert first["imagined_return_per_step"] == pytest.approx(m["untrained_actor_dream_return_per_step"], abs=1e-6)
+    assert first["real_return_per_step"] == pytest.approx(m["untrained_real_return_per_step_eval_horizon"], abs=1e-6)
 
 
 def test_scrubber_export_refuses_another_policy(tmp_path, monkeypatch):
