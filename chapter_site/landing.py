@@ -173,7 +173,7 @@ def lessons(data: dict) -> list[str]:
                "small": ": before training the two worlds differ by less than the minimum effect.",
                "same": ": before training the two worlds cannot be told apart."}[outcome]
     best = max(data["frames"], key=lambda f: f["eval"]["real_success_rate"])
-    success = (f"real success was 0% at every kept iteration" if best["eval"]["real_success_rate"] == 0 else
+    success = ("real success was 0% at every kept iteration" if best["eval"]["real_success_rate"] == 0 else
                f"real success reached {best['eval']['real_success_rate']:.0%} (iteration {best['iteration']})")
     def words(a, _, key):
         return _change_words(_change_test(a), e1[key] - e0[key])

@@ -1,6 +1,7 @@
 // The iteration scrubber: move the slider, and both worlds, the numbers and the "what to notice"
-// lines show the policy as it was at that training iteration (the spawn pose's ghost included). Every frame was drawn at build time (chapter_site/landing.py);
-// this only swaps attributes and text. Without JavaScript the page shows the last iteration.
+// lines show the policy as it was at that training iteration (the spawn pose's ghost included).
+// Every frame was drawn at build time (chapter_site/landing.py); this only swaps attributes and
+// text. Without JavaScript the page shows the last iteration.
 (function () {
   "use strict";
   function init() {
