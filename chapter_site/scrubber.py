@@ -3,13 +3,21 @@
 ``make chapter`` calls :func:`export` after the notebooks have run. It trains seed 0's actor again
 in the world model the notebooks cached, exactly as the notebooks did (the same seeds; only the
 real-floor monitor looks more often, and the monitor never touches training), keeps a copy of the
-actor at every monitor point, and runs each copy from one held-out start in the dream and in the
-real simulator. The last copy must equal the policy the notebooks trained and evaluated, bit for
-bit: :func:`export` checks that against the cached agent and refuses to write otherwise.
+actor at every monitor point, and runs each copy through **the headline's own evaluation**: the
+same held-out starts (``cfg.eval_episodes`` of them, ``cfg.eval_horizon`` steps) in the dream and
+in the real simulator, with the calls ``evaluate.two_world_eval`` makes. The last copy must equal
+the policy the notebooks trained and evaluated, bit for bit: :func:`export` checks that against
+the cached agent and refuses to write otherwise; so the last kept iteration's evaluation is the
+chapter's headline evaluation, and the first (iteration 0, before any update) is its untrained
+control.
 
-The file it writes (``<out>/site/scrubber.json``) holds, per kept iteration, the imagined and
-the real reward per step on that start, and both worlds' block and pusher positions at every
-control step, in millimetres and degrees; plus the training curves for the landing page.
+The file it writes (``<out>/site/scrubber.json``) holds, per kept iteration, that evaluation (the
+mean and each start's reward per step in both worlds, real success) and, for the first held-out
+start, both worlds' block and pusher positions at every control step, in millimetres and degrees,
+with what the scrubber points at (how far the block moved from its spawn pose, how near the pusher
+came to it, the share of steps the pusher spent pinned against a wall); plus the training curves
+(the training dreams and the monitor's real floor, kept for the record: the landing page draws the
+evaluation instead).
 """
 
 from __future__ import annotations
@@ -39,17 +47,37 @@ def _thin(values, points: int = CURVE_POINTS) -> dict:
     return {"x": [round(x, 1) for x in xs], "y": [round(y, 5) for y in ys]}
 
 
-def _world(rollout) -> dict:
-    """One start's trajectory in one world: mean reward per step, pusher (x, y) and block
-    (x, y, yaw) at every step, in mm and degrees."""
+def _world(rollout, i: int = 0) -> dict:
+    """Start ``i``'s trajectory in one world: mean reward per step, pusher (x, y) and block
+    (x, y, yaw) at every step, in mm and degrees; and what the scrubber points at, in metres: how
+    far the block ended from its spawn pose and how much nearer the target, how near the pusher's
+    rim ever came to the T, and the share of steps the pusher spent pinned against a wall."""
+    from pusht.analysis import at_wall
     from pusht.env import obs_to_pose
+    from pusht.evaluate import pusher_gap
 
-    pusher, tee = obs_to_pose(rollout.obs[:, 0])          # (T+1, 2), (T+1, 3)
-    return {"reward_per_step": round(float(rollout.return_per_step[0]), 5),
-            "final_block_to_target_m": round(float(rollout.final_tee_dist[0]), 4),
+    pusher, tee = obs_to_pose(rollout.obs[:, i])          # (T+1, 2), (T+1, 3)
+    alive = ~np.isnan(rollout.rewards[:, i])              # steps the episode lasted
+    return {"reward_per_step": round(float(rollout.return_per_step[i]), 5),
+            "final_block_to_target_m": round(float(rollout.final_tee_dist[i]), 4),
+            "block_moved_m": round(float(np.linalg.norm(tee[-1, :2] - tee[0, :2])), 4),
+            "block_nearer_target_m": round(float(np.linalg.norm(tee[0, :2]) - np.linalg.norm(tee[-1, :2])), 4),
+            "pusher_min_gap_m": round(float(np.nanmin(pusher_gap(rollout)[:, i])), 4),
+            "pusher_at_wall_share": round(float(at_wall(rollout.obs[1:, i])[alive].mean()), 4),
             "pusher_mm": np.rint(pusher * 1000).astype(int).tolist(),
             "block_mm_deg": np.column_stack([np.rint(tee[:, :2] * 1000), np.rint(np.degrees(tee[:, 2]))])
             .astype(int).tolist()}
+
+
+def _evaluation(dream, real) -> dict:
+    """The headline's numbers for one kept iteration, as ``two_world_eval`` computes them, plus
+    each start's reward per step (the page tests changes start by start)."""
+    imagined, real_r = float(dream.return_per_step.mean()), float(real.return_per_step.mean())
+    return {"imagined_return_per_step": round(imagined, 6), "real_return_per_step": round(real_r, 6),
+            "imagination_gap": round(imagined - real_r, 6),
+            "real_success_rate": round(float(real.success.mean()), 4),
+            "imagined_per_start": [round(float(v), 5) for v in dream.return_per_step],
+            "real_per_start": [round(float(v), 5) for v in real.return_per_step]}
 
 
 def _same_weights(a: dict, b: dict) -> bool:
@@ -59,10 +87,12 @@ def _same_weights(a: dict, b: dict) -> bool:
 def export(out: Path, smoke: bool, seed: int = 0, log=print) -> Path:
     """Write ``out/site/scrubber.json`` for the chapter run in ``out`` (its model cache is
     ``out/cache``, as the notebooks' is ``OUT/cache``). Returns the path."""
+    from pusht.analysis import at_wall
     from pusht.config import make_config
     from pusht.data import EVAL_SEED_BASE, start_seeds
     from pusht.dreamer import agent_stage, world_model_stage
-    from pusht.env import CONTROL_DT
+    from pusht.env import CONTROL_DT, SUCCESS_POS
+    from pusht.evaluate import TOUCH_TOL
     from pusht.evaluate import dream_rollout, policy_of, real_rollout
 
     out = Path(out)
@@ -80,7 +110,8 @@ def export(out: Path, smoke: bool, seed: int = 0, log=print) -> Path:
 
     T = ws.data.torch(cfg.device)
     mean, std = T["mean"], T["std"]
-    start = int(start_seeds(EVAL_SEED_BASE, seed, 1)[0])
+    seeds = [int(s) for s in start_seeds(EVAL_SEED_BASE, seed, cfg.eval_episodes)]   # the headline's starts
+    start = seeds[0]                                                                # the scrubber's one
     agent = copy.deepcopy(stage.agent)
     agent.eval()
     frames = []
@@ -88,11 +119,13 @@ def export(out: Path, smoke: bool, seed: int = 0, log=print) -> Path:
     imag = stage.history["imag_reward"]
     for it, (weights, floor) in zip(iters, copies):
         agent.load_state_dict(weights)
-        real = real_rollout(ws.wm, policy_of(agent), [start], cfg.eval_horizon, mean, std)
+        # two_world_eval's own two calls: reality first, then the dream from reality's start frames
+        real = real_rollout(ws.wm, policy_of(agent), seeds, cfg.eval_horizon, mean, std)
         dream = dream_rollout(ws.wm, policy_of(agent), real.obs[0], cfg.eval_horizon, mean, std)
         frames.append({"iteration": it,
                        "imagined_reward_train": round(float(imag[min(it, len(imag) - 1)]), 5),
                        "real_floor": round(floor, 5),
+                       "eval": _evaluation(dream, real),
                        "dream": _world(dream), "real": _world(real)})
     data = {
         "written_by": "chapter_site/scrubber.py (make chapter)",
@@ -100,7 +133,12 @@ def export(out: Path, smoke: bool, seed: int = 0, log=print) -> Path:
         "commit": provenance.commit(), "host": provenance.host(),
         "seed": seed, "config": "smoke" if smoke else "default",
         "start_seed": start, "horizon": cfg.eval_horizon, "control_dt_s": CONTROL_DT,
-        "imag_iters": cfg.imag_iters, "monitor_starts": cfg.monitor_episodes,
+        "eval_starts": len(seeds), "imag_iters": cfg.imag_iters, "imag_horizon": cfg.imag_horizon,
+        "monitor_starts": cfg.monitor_episodes,
+        # what the scrubber's readout compares with: the expert data's own share of steps with the
+        # pusher against a wall, a touch (m) and the block's "moved" (m, the success tolerance)
+        "expert_pusher_at_wall_share": round(float(at_wall(ws.data.train_obs).mean()), 4),
+        "touch_tol_m": TOUCH_TOL, "moved_tol_m": SUCCESS_POS,
         "same_as_chapter_agent": True,
         "frames": frames,
         "curves": {"imagined_reward": _thin(stage.history["imag_reward"]),
@@ -111,6 +149,6 @@ def export(out: Path, smoke: bool, seed: int = 0, log=print) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(data, separators=(",", ":")) + "\n")
     if log:
-        log(f"scrubber: {len(frames)} iterations of seed {seed}'s actor, start {start}, "
+        log(f"scrubber: {len(frames)} iterations of seed {seed}'s actor, each on the {len(seeds)} held-out starts, "
             f"{path.stat().st_size / 1024:.0f} KB -> {path}")
     return path

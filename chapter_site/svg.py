@@ -31,9 +31,13 @@ def _fmt(v: float) -> str:
 
 
 def line_chart(series: list[dict], xlabel: str, ylabel: str, title: str, width: int = 560,
-               height: int = 300, log_y: bool = False, chart_id: str = "") -> str:
+               height: int = 300, log_y: bool = False, chart_id: str = "", band: tuple[int, int] | None = None,
+               brackets: list[dict] = ()) -> str:
     """A line chart. ``series``: dicts with ``x``, ``y``, ``label``, ``color`` and optionally
-    ``markers`` (draw points) and ``dash``. Axes labelled, a legend on top."""
+    ``markers`` (draw points) and ``dash``. Axes labelled, a legend on top. ``band`` (i, j) shades
+    the area between series i and j (which share their x), in series i's colour; each of
+    ``brackets`` (dicts ``x``, ``y0``, ``y1``, ``label``) is a vertical bracket from y0 to y1 at x,
+    labelled beside it, inwards."""
     left, right, top, bottom = 76, 14, 40, 56
     xs = np.concatenate([np.asarray(s["x"], float) for s in series])
     ys = np.concatenate([np.asarray(s["y"], float) for s in series])
@@ -69,6 +73,21 @@ def line_chart(series: list[dict], xlabel: str, ylabel: str, title: str, width: 
     out.append(f'<text x="{left + pw / 2:.1f}" y="{height - 8}" text-anchor="middle" class="axis">{escape(xlabel)}</text>'
                f'<text transform="translate(18 {top + ph / 2:.1f}) rotate(-90)" text-anchor="middle" '
                f'class="axis">{escape(ylabel)}</text>')
+    if band is not None:
+        a, b = (series[k] for k in band)
+        upper = [f"{px(x):.1f},{py(y):.1f}" for x, y in zip(np.asarray(a["x"], float), np.asarray(a["y"], float))]
+        lower = [f"{px(x):.1f},{py(y):.1f}" for x, y in zip(np.asarray(b["x"], float), np.asarray(b["y"], float))]
+        out.append(f'<polygon class="band" points="{" ".join(upper + lower[::-1])}" fill="{a["color"]}" '
+                   'fill-opacity="0.12" stroke="none"/>')
+    for br in brackets:
+        x, ya, yb = px(float(br["x"])), py(float(br["y0"])), py(float(br["y1"]))
+        inward = 1 if x < left + pw / 2 else -1
+        x += 7 * inward                                  # clear of the lines' end markers
+        tick = 5 * inward
+        out.append(f'<path class="bracket" d="M{x + tick:.1f},{ya:.1f} H{x:.1f} V{yb:.1f} H{x + tick:.1f}" '
+                   f'fill="none" stroke="{INK}" stroke-width="1.2"/>'
+                   f'<text x="{x + 9 * inward:.1f}" y="{(ya + yb) / 2 + 5:.1f}" '
+                   f'text-anchor="{"start" if inward > 0 else "end"}" class="note">{escape(br["label"])}</text>')
     lx = left
     for s in series:
         y = np.asarray(s["y"], float)
@@ -138,9 +157,9 @@ def path_points(xy_mm, scale: float, size: int) -> str:
 
 
 def world_view(world: dict, name: str, color: str, size: int = 240) -> tuple[str, dict]:
-    """One world of one scrubber frame: the table, the target T, the block's path and final pose,
-    the pusher's path and final position. Returns the SVG and its variable parts (the attributes
-    the scrubber's script swaps)."""
+    """One world of one scrubber frame: the table, the target T, the block's spawn pose (a faint
+    ghost), its path and final pose, the pusher's path and final position. Returns the SVG and its
+    variable parts (the attributes the scrubber's script swaps)."""
     scale = size / (2 * ARENA_HALF)
     parts = frame_parts(world, scale, size)
     target = "".join(f'<polygon points="{p}" fill="none" stroke="{TARGET}" stroke-dasharray="4 3"/>'
@@ -150,6 +169,10 @@ def world_view(world: dict, name: str, color: str, size: int = 240) -> tuple[str
            f'data-world="{escape(name)}" xmlns="http://www.w3.org/2000/svg"><title>{escape(name)}</title>'
            f'<rect x="0.5" y="0.5" width="{size - 1}" height="{size - 1}" fill="#f6f8fa" stroke="{MUTED}"/>'
            f"{target}"
+           f'<polygon class="ghost0" points="{parts["ghost"][0]}" fill="{color}" fill-opacity="0.08" '
+           f'stroke="{color}" stroke-opacity="0.5" stroke-dasharray="2 2"/>'
+           f'<polygon class="ghost1" points="{parts["ghost"][1]}" fill="{color}" fill-opacity="0.08" '
+           f'stroke="{color}" stroke-opacity="0.5" stroke-dasharray="2 2"/>'
            f'<polyline class="block-path" fill="none" stroke="{color}" stroke-opacity="0.45" '
            f'points="{parts["block_path"]}"/>'
            f'<polygon class="tee0" points="{parts["tee"][0]}" fill="{color}" fill-opacity="0.55" stroke="{color}"/>'
@@ -162,10 +185,11 @@ def world_view(world: dict, name: str, color: str, size: int = 240) -> tuple[str
 
 
 def frame_parts(world: dict, scale: float, size: int) -> dict:
-    """The drawn parts of one world at one iteration, as SVG attribute strings."""
+    """The drawn parts of one world at one iteration, as SVG attribute strings: the block's final
+    pose (``tee``) and its spawn pose (``ghost``), its path, the pusher's path and final position."""
     block = world["block_mm_deg"]
     x, y, yaw = block[-1]
-    return {"tee": tee_points(x, y, yaw, scale, size),
+    return {"tee": tee_points(x, y, yaw, scale, size), "ghost": tee_points(*block[0], scale, size),
             "block_path": path_points([b[:2] for b in block], scale, size),
             "pusher_path": path_points(world["pusher_mm"], scale, size),
             "pusher": path_points([world["pusher_mm"][-1]], scale, size)}

@@ -1,6 +1,10 @@
 """The chapter site's parts, without a browser (tests/test_site_browser.py opens the built site).
 
 * the scrubber's export trains the chapter's own actor again and its last frame is that actor;
+* its evaluation over training is the headline's: the last kept iteration gives the run's own
+  imagined and real reward per step, the first the untrained controls';
+* the reading under the chart and the scrubber's "what to notice" lines are computed from the run's
+  numbers, each with its true alternative;
 * the colophon finds every region the notebooks show and fingerprints exactly the shown text;
 * the wall-clock table says "pending" for a tier never measured and never invents a figure;
 * a published notebook page carries the student release's code, never a solution, and no run paths;
@@ -16,6 +20,7 @@ import re
 from pathlib import Path
 
 import nbformat
+import numpy as np
 import pytest
 import yaml
 
@@ -27,9 +32,14 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
-def smoke_export(tmp_path_factory):
+def smoke_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("run")
-    return json.loads(export(out, smoke=True, log=None).read_text())
+    return out, json.loads(export(out, smoke=True, log=None).read_text())
+
+
+@pytest.fixture(scope="module")
+def smoke_export(smoke_run):
+    return smoke_run[1]
 
 
 def test_scrubber_export_is_the_chapters_actor_at_every_kept_iteration(smoke_export):
@@ -45,6 +55,36 @@ def test_scrubber_export_is_the_chapters_actor_at_every_kept_iteration(smoke_exp
             assert all(abs(v) <= 2000 for xy in w["pusher_mm"] for v in xy)    # millimetres, on or near the table
     assert d["curves"]["real_floor"]["x"] == iters
     assert d["config"] == "smoke" and d["seed"] == 0
+    for f in d["frames"]:
+        e = f["eval"]
+        assert len(e["imagined_per_start"]) == len(e["real_per_start"]) == d["eval_starts"]
+        assert e["imagined_return_per_step"] == pytest.approx(np.mean(e["imagined_per_start"]), abs=1e-5)
+        assert e["imagination_gap"] == pytest.approx(e["imagined_return_per_step"] - e["real_return_per_step"], abs=2e-6)
+        # the scrubber's start is the first of the evaluation's starts, from the same rollout
+        assert f["real"]["reward_per_step"] == e["real_per_start"][0]
+        for world in ("dream", "real"):
+            w = f[world]
+            moved = np.linalg.norm(np.subtract(w["block_mm_deg"][-1][:2], w["block_mm_deg"][0][:2])) / 1000
+            assert w["block_moved_m"] == pytest.approx(moved, abs=0.0015)     # mm rounding of both ends
+            assert 0 <= w["pusher_at_wall_share"] <= 1
+
+
+def test_evaluation_over_training_is_the_headline_evaluation(smoke_run):
+    """The chart's last point is the run's own two-world evaluation (what the headline shows), and
+    its first is that evaluation's untrained control: the same starts, horizon and calls."""
+    from pusht.config import make_config
+    from pusht.dreamer import run
+
+    out, d = smoke_run
+    m = run(make_config(smoke=True, seed=0, out=out), cache_dir=out / "cache", model_cache=out / "cache",
+            log=None).metrics
+    first, last = d["frames"][0]["eval"], d["frames"][-1]["eval"]
+    assert d["eval_starts"] == m["eval_episodes"] and d["horizon"] == m["eval_horizon"]
+    assert last["imagined_return_per_step"] == pytest.approx(m["imagined_return_per_step"], abs=1e-6)
+    assert last["real_return_per_step"] == pytest.approx(m["real_return_per_step"], abs=1e-6)
+    assert last["real_success_rate"] == m["real_success_rate"]
+    assert first["imagined_return_per_step"] == pytest.approx(m["untrained_actor_dream_return_per_step"], abs=1e-6)
+    assert first["real_return_per_step"] == pytest.approx(m["untrained_real_return_per_step_eval_horizon"], abs=1e-6)
 
 
 def test_scrubber_export_refuses_another_policy(tmp_path, monkeypatch):
@@ -127,3 +167,132 @@ def test_landing_numbers_come_from_meta_and_the_run(smoke_export):
     payload = json.loads(re.search(r'id="scrubber-data">(.*?)</script>', scrub).group(1))
     assert len(payload) == len(smoke_export["frames"])
     assert "</script" not in re.search(r'id="scrubber-data">(.*?)</script>', scrub).group(1)
+
+
+# -- the reading under the chart ------------------------------------------------------------------
+
+def _run(first, last, success=(0.0, 0.0), config="default", starts=None, horizon=100):
+    """A scrubber.json with two kept iterations whose per-start rewards are given as
+    (imagined, real) lists."""
+    frames = []
+    for it, (dream, real), ok in zip((0, 400), (first, last), success):
+        d, r = np.asarray(dream, float), np.asarray(real, float)
+        frames.append({"iteration": it, "eval": {
+            "imagined_return_per_step": float(d.mean()), "real_return_per_step": float(r.mean()),
+            "imagination_gap": float(d.mean() - r.mean()), "real_success_rate": ok,
+            "imagined_per_start": d.tolist(), "real_per_start": r.tolist()}})
+    return {"seed": 0, "config": config, "eval_starts": starts or len(first[0]), "horizon": horizon,
+            "imag_iters": 400, "frames": frames}
+
+
+def _seed0(data, **change):
+    last = data["frames"][-1]["eval"]
+    return {"seed": 0, "smoke": False, "eval_episodes": data["eval_starts"], "eval_horizon": data["horizon"],
+            "imag_iters": 400, **{k: last[k] for k in ("imagined_return_per_step", "real_return_per_step",
+                                                       "imagination_gap", "real_success_rate")}, **change}
+
+
+NOISE = np.array([0.01, -0.012, 0.004, -0.003, 0.006, -0.005])
+
+
+def test_reading_says_whether_the_last_point_is_the_headline():
+    data = _run(([-0.16] * 6 + NOISE, [-0.40] * 6 + NOISE / 2), ([-0.22] * 6 + NOISE, [-0.40] * 6 - NOISE / 3))
+    same = _seed0(data)
+    assert landing.evaluation_case(data, same) == "same"
+    text = landing.reconcile_sentence(data, same)
+    last = data["frames"][-1]["eval"]
+    assert "is the headline above" in text
+    for k in ("imagined_return_per_step", "real_return_per_step", "imagination_gap"):
+        assert f"{last[k]:+.3f}" in text
+    other_host = _seed0(data, imagination_gap=last["imagination_gap"] + 0.01)
+    assert landing.evaluation_case(data, other_host) == "differs"
+    assert "not at the headline's gap of" in landing.reconcile_sentence(data, other_host)
+    smoke = _run(*[[d[:4], r[:4]] for d, r in (([-0.16] * 6 + NOISE, [-0.4] * 6), ([-0.2] * 6, [-0.4] * 6))],
+                 config="smoke", horizon=20)
+    assert landing.evaluation_case(smoke, same) == "other"
+    text = landing.reconcile_sentence(smoke, same)
+    assert "smoke run, 4 starts of 20 steps" in text and "not the headline's 6-start, 100-step" in text
+
+
+def test_lessons_are_computed_with_their_true_alternatives():
+    # the headline's pattern: a gap before training; the dream falls, reality stays, no success
+    data = _run(([-0.16] * 6 + NOISE, [-0.40] * 6 + NOISE / 2), ([-0.22] * 6 + NOISE, [-0.40] * 6 - NOISE / 3))
+    before, during = landing.lessons(data)
+    assert "a gap of +0.240" in before and "rosier before the actor has learned anything" in before
+    assert "the dream's reward per step fell by 0.060" in during
+    assert "reality's could not be told from no change" in during
+    assert "real success was 0% at every kept iteration" in during
+    assert "the gap fell by 0.060" in during
+    # no gap before training, a dream that rises and a real success
+    data = _run(([-0.40] * 6 + NOISE, [-0.40] * 6 - NOISE), ([-0.30] * 6 + NOISE, [-0.35] * 6 + NOISE),
+                success=(0.0, 1 / 6))
+    before, during = landing.lessons(data)
+    assert "cannot be told apart" in before
+    assert "the dream's reward per step rose by 0.100" in during and "reality's rose by 0.050" in during
+    assert "real success reached 17% (iteration 400)" in during
+    # a dream gloomier than reality before training
+    before, _ = landing.lessons(_run(([-0.5] * 6 + NOISE, [-0.4] * 6), ([-0.5] * 6, [-0.4] * 6)))
+    assert "gloomier than reality" in before
+    # beyond the noise but smaller than the minimum effect: not read as a change
+    tiny = NOISE / 100
+    before, during = landing.lessons(_run(([-0.395] * 6 + tiny, [-0.4] * 6), ([-0.39] * 6 + tiny, [-0.4] * 6)))
+    assert "differ by less than the minimum effect" in before
+    assert "the dream's reward per step changed by less than the minimum effect (+0.005" in during
+
+
+def test_curves_panel_draws_the_evaluation_with_labelled_axes(smoke_export):
+    meta = yaml.safe_load((ROOT / "meta.yaml").read_text())
+    html = landing.curves_html(smoke_export, meta)
+    chart = re.search(r'<svg[^>]*id="curve-reward".*?</svg>', html).group(0)
+    for label in ("actor training iteration", "reward per step (0.1 s)", "imagined: in the dream",
+                  "real: in true PushT"):
+        assert label in chart
+    first, last = smoke_export["frames"][0]["eval"], smoke_export["frames"][-1]["eval"]
+    assert f"gap {first['imagination_gap']:+.3f}" in chart and f"gap {last['imagination_gap']:+.3f}" in chart
+    assert 'class="band"' in chart
+    assert 'data-case="other"' in html          # the smoke run is not meta.yaml's default evaluation
+    assert html.count("<li>") == 2
+
+
+# -- what to notice in the scrubber ----------------------------------------------------------------
+
+def _frame(it, moved, gap, share, nearer=0.05):
+    world = {"block_moved_m": moved, "block_nearer_target_m": nearer, "pusher_min_gap_m": gap,
+             "pusher_at_wall_share": share}
+    return {"iteration": it, "dream": dict(world), "real": dict(world, block_moved_m=0.0)}
+
+
+NOTICE = {"imag_iters": 400, "moved_tol_m": 0.02, "touch_tol_m": 0.003, "expert_pusher_at_wall_share": 0.0}
+
+
+def test_drift_and_leaving_lines_follow_the_frame():
+    drift = landing.drift_text(_frame(0, 0.226, 0.086, 0.26, nearer=0.112), NOTICE)
+    assert drift.startswith("Drift: with the untrained policy") and "slid 0.226 m" in drift
+    assert "0.112 m nearer the target" in drift and "never came within 0.086 m" in drift
+    touched = landing.drift_text(_frame(400, 0.1, -0.01, 0.9), NOTICE)
+    assert "the trained policy" in touched and "reached the block" in touched and "Drift" not in touched
+    still = landing.drift_text(_frame(200, 0.01, 0.1, 0.9), NOTICE)
+    assert "stayed within 2 cm" in still and "the policy at iteration 200" in still
+    leaving = landing.leaving_text(_frame(400, 0.1, 0.1, 0.94), NOTICE)
+    assert leaving.startswith("Leaving the data") and "94%" in leaving and "spends 0%" in leaving
+    staying = landing.leaving_text(_frame(0, 0.1, 0.1, 0.004), NOTICE)
+    assert "no more than the expert data" in staying and "Leaving" not in staying
+
+
+def test_scrubber_draws_the_spawn_ghost_and_the_notice_lines(smoke_export):
+    from chapter_site import svg
+
+    html = landing.scrubber_html(smoke_export)
+    last = smoke_export["frames"][-1]
+    scale = 240 / (2 * svg.ARENA_HALF)
+    for world in ("dream", "real"):
+        ghost = svg.tee_points(*last[world]["block_mm_deg"][0], scale, 240)
+        assert f'class="ghost0" points="{ghost[0]}"' in html and f'class="ghost1" points="{ghost[1]}"' in html
+    from html import escape
+    assert f'data-field="drift">{escape(landing.drift_text(last, smoke_export))}<' in html
+    assert f'data-field="leaving">{escape(landing.leaving_text(last, smoke_export))}<' in html
+    payload = json.loads(re.search(r'id="scrubber-data">(.*?)</script>', html).group(1).replace("<\\/", "</"))
+    for f, p in zip(smoke_export["frames"], payload):
+        assert p["readout"]["drift"] == landing.drift_text(f, smoke_export)
+        assert p["readout"]["leaving"] == landing.leaving_text(f, smoke_export)
+        assert p["dream"]["ghost"] == svg.tee_points(*f["dream"]["block_mm_deg"][0], scale, 240)

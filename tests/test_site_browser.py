@@ -6,7 +6,9 @@ that is not given, built here from a fresh smoke run. It is served on 127.0.0.1 
 * the landing page loads with no console error, no failed request and no request to any other host,
   at a phone width and a desktop width (screenshots of both go to ``$LANE_ARTIFACTS``);
 * with JavaScript off, the headline numbers are on the page and equal ``meta.yaml``'s;
-* moving the scrubber shows that iteration's numbers (those of ``scrubber.json``) and redraws both worlds;
+* the chart's reading (which evaluation it is, and its two lessons) is on the page with JavaScript off;
+* moving the scrubber shows that iteration's numbers and "what to notice" lines (computed from
+  ``scrubber.json``), and redraws both worlds, the spawn pose's ghost included;
 * every image on every notebook page loads.
 """
 
@@ -132,42 +134,55 @@ def test_headline_reads_without_javascript_and_equals_meta(browser, served):
         assert value == pytest.approx(seed0[key], abs=0.0005 if not text.endswith("%") else 0.005), key
     assert page.locator("#two-worlds svg").count() == 1                   # the bars are static SVG
     assert page.locator("#curves svg").count() == 2
+    assert page.locator("#curves .reading").inner_text().strip()              # which evaluation the chart is
+    assert page.locator("#curves ul.lessons li").count() == 2
+    assert page.locator("#scrubber ul.notice li").count() == 2                # what to notice, last iteration
     assert not page.locator("#scrub").is_visible()                        # the slider needs JavaScript
     assert page.locator("#scrubber svg").count() == 2                     # both worlds drawn anyway
     assert "pending" in page.locator("#wallclock").inner_text()
     ctx.close()
 
 
-def _frames(site: Path) -> list[dict]:
-    return json.loads((site / "_static" / "scrubber.json").read_text())["frames"]
+def _data(site: Path) -> dict:
+    return json.loads((site / "_static" / "scrubber.json").read_text())
+
+
+FIELDS = ("iteration", "dream-reward", "real-reward", "dream-dist", "real-dist", "drift", "leaving")
 
 
 def test_scrubber_moves_figure_and_numbers(browser, served, site):
-    frames = _frames(site)
+    from chapter_site import landing, svg
+
+    data = _data(site)
+    frames = data["frames"]
     page = browser.new_page()
     page.goto(f"{served}/index.html")
     slider = page.locator("#scrub")
     slider.wait_for(state="visible")
 
+    def attr(world, part, name):
+        return page.locator(f'#scrubber svg[data-world="{world}"] .{part}').get_attribute(name)
+
     def state():
-        return ({f: page.locator(f'#scrubber [data-field="{f}"]').inner_text()
-                 for f in ("iteration", "dream-reward", "real-reward", "dream-dist", "real-dist")},
-                [page.locator(f'#scrubber svg[data-world="{w}"] .{p}').get_attribute(a)
-                 for w in ("in the dream", "in reality")
+        return ({f: page.locator(f'#scrubber [data-field="{f}"]').inner_text() for f in FIELDS},
+                [attr(w, p, a) for w in ("in the dream", "in reality")
                  for p, a in (("tee0", "points"), ("pusher-path", "points"), ("pusher", "cx"))])
 
     last_numbers, last_drawing = state()
     assert last_numbers["iteration"] == str(frames[-1]["iteration"])
+    for w in ("in the dream", "in reality"):
+        assert page.locator(f'#scrubber svg[data-world="{w}"] .ghost0').count() == 1   # the spawn pose, drawn
+    scale = 240 / (2 * svg.ARENA_HALF)
     for index in (0, len(frames) // 2):
         slider.fill(str(index))
         numbers, drawing = state()
         f = frames[index]
-        assert numbers == {"iteration": str(f["iteration"]),
-                           "dream-reward": f"{f['dream']['reward_per_step']:+.3f}",
-                           "real-reward": f"{f['real']['reward_per_step']:+.3f}",
-                           "dream-dist": f"{f['dream']['final_block_to_target_m']:.3f}",
-                           "real-dist": f"{f['real']['final_block_to_target_m']:.3f}"}
+        expected = landing._readout(f, data)
+        assert numbers == {k: expected[k] for k in FIELDS}
         assert drawing != last_drawing, f"iteration {f['iteration']}: the worlds were not redrawn"
+        for world, name in (("dream", "in the dream"), ("real", "in reality")):
+            ghost = svg.tee_points(*f[world]["block_mm_deg"][0], scale, 240)
+            assert [attr(name, "ghost0", "points"), attr(name, "ghost1", "points")] == ghost
     page.close()
 
 

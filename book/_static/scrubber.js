@@ -1,6 +1,7 @@
-// The iteration scrubber: move the slider, and both worlds and the numbers show the policy as it
-// was at that training iteration. Every frame was drawn at build time (chapter_site/landing.py);
-// this only swaps attributes and text. Without JavaScript the page shows the last iteration.
+// The iteration scrubber: move the slider, and both worlds, the numbers and the "what to notice"
+// lines show the policy as it was at that training iteration (the spawn pose's ghost included).
+// Every frame was drawn at build time (chapter_site/landing.py); this only swaps attributes and
+// text. Without JavaScript the page shows the last iteration.
 (function () {
   "use strict";
   function init() {
@@ -17,6 +18,8 @@
         var svg = worlds[w], p = f[w];
         svg.querySelector(".tee0").setAttribute("points", p.tee[0]);
         svg.querySelector(".tee1").setAttribute("points", p.tee[1]);
+        svg.querySelector(".ghost0").setAttribute("points", p.ghost[0]);
+        svg.querySelector(".ghost1").setAttribute("points", p.ghost[1]);
         svg.querySelector(".block-path").setAttribute("points", p.block_path);
         svg.querySelector(".pusher-path").setAttribute("points", p.pusher_path);
         var xy = p.pusher.split(",");
