@@ -26,7 +26,6 @@ import argparse
 import csv
 import json
 import os
-import platform
 import resource
 import subprocess
 import sys
@@ -107,16 +106,9 @@ def host_description() -> str:
     /proc/cpuinfo where there is one."""
     from pusht.dreamer import platform_fingerprint
 
-    fp, info = platform_fingerprint(), {}
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            key, _, value = line.partition(":")
-            info.setdefault(key.strip(), value.strip())
-    except OSError:
-        pass
-    cpu = info.get("model name") or platform.processor() or "unknown CPU"
-    if "cpu family" in info:
-        cpu += f" (family {info['cpu family']} model {info.get('model', '?')})"
+    from pusht.host import cpu_model
+
+    fp, cpu = platform_fingerprint(), cpu_model(family=True)
     return f"{fp['machine']} {cpu}, {os.cpu_count()} cores, torch {fp['torch']} ({fp['cpu_capability']})"
 
 

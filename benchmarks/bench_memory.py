@@ -33,15 +33,9 @@ RECORD = ROOT / "benchmarks" / "notebook_memory.txt"
 
 
 def host() -> list[str]:
-    cpu = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    usable = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    from pusht.host import cores, cpu_model
+
+    cpu, usable = cpu_model(), cores()
     ram = ""
     try:
         kb = int(Path("/proc/meminfo").read_text().split("MemTotal:")[1].split()[0])

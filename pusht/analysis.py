@@ -88,6 +88,12 @@ def gap_split(rollouts: dict, steps: int | None, part: str | None = None) -> dic
                  - (P["trained", "real"] - P["untrained", "real"])}
     for key, x in per_start.items():
         out[f"{key}_se"] = _se(x)
+    for (pol, w), x in P.items():                   # each world's rating of each policy, with its own noise
+        out[f"{pol}_{w}_se"] = _se(x)
+    # Exercise 1's question, "is the drift at least half of the gap?", as one quantity with its own
+    # standard error over the starts (the drift is part of the gap, so the two are not independent)
+    out["drift_minus_half_gap"] = float(np.nanmean(per_start["drift"] - 0.5 * per_start["gap"]))
+    out["drift_minus_half_gap_se"] = _se(per_start["drift"] - 0.5 * per_start["gap"])
     return out
 
 

@@ -310,19 +310,6 @@ FLOAT_KEYS = ("machine", "cpu_vendor", "cpu_model", "torch", "cpu_capability", "
               "numpy", "pymunk")
 
 
-def _cpuinfo() -> dict:
-    info = {}
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            key, _, value = line.partition(":")
-            if not key.strip():
-                break                                   # the first processor is enough
-            info.setdefault(key.strip(), value.strip())
-    except OSError:
-        pass
-    return info
-
-
 def _mkl() -> tuple[str, str]:
     """(MKL version, the code path MKL takes here), read from the MKL linked into torch.
 
@@ -359,10 +346,10 @@ def platform_fingerprint() -> dict:
     """
     import platform
 
-    info = _cpuinfo()
-    model = info.get("model name") or platform.processor() or "unknown"
-    if "cpu family" in info:
-        model += f" (family {info['cpu family']} model {info.get('model', '?')})"
+    from .host import cpu_info, cpu_model
+
+    info = cpu_info()
+    model = cpu_model(family=True)
     mkl, mkl_path = _mkl()
     try:
         from importlib.metadata import version

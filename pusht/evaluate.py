@@ -289,8 +289,9 @@ def two_world_eval(wm, agent, init_agent, seeds, horizon: int, mean, std,
             for part in (None, "position", "yaw"):
                 tag = f"_{part}" if part else ""
                 for key, value in gap_split(rollouts, steps, part).items():
-                    name = f"{key}_return_per_step" if key.endswith(("_dream", "_real")) else (
-                        key.replace("gap", "imagination_gap") if key.startswith("gap") else f"gap_{key}")
+                    name = (f"{key}_return_per_step" if key.endswith(("_dream", "_real")) else
+                            f"{key[:-3]}_return_per_step_se" if key.endswith(("_dream_se", "_real_se")) else
+                            key.replace("gap", "imagination_gap") if key.startswith("gap") else f"gap_{key}")
                     metrics[f"{name}{tag}_{span}"] = value
             for key, value in size_split(rollouts, steps).items():
                 name = key.replace("gap", "imagination_gap") if key.startswith("gap") else f"gap_{key}"

@@ -394,7 +394,6 @@ def write_memory(out: Path, records: dict, smoke: bool) -> Path:
 
 def record_times(out: Path) -> Path:
     """pusht/nb/times.json from the executed notebooks in ``out`` (see pusht/nb/timing.py)."""
-    import platform
     import subprocess
     from datetime import datetime, timezone
 
@@ -402,9 +401,9 @@ def record_times(out: Path) -> Path:
 
     from pusht.nb import timing
 
-    cpu = next((line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
-                if line.startswith("model name")), platform.processor()) if Path("/proc/cpuinfo").exists() \
-        else platform.processor()
+    from pusht.host import cpu_model
+
+    cpu = cpu_model()
     try:
         rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True,
                              check=True).stdout.strip()

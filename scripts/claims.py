@@ -34,23 +34,16 @@ from pathlib import Path
 
 from chapter import ROOT, execute
 
+from pusht.host import cpu_model
 from pusht.nb.claims import LOG_ENV, conflicts, load_all
 
 NOTEBOOKS = ("03_imagination_actor", "04_imagination_gap", "05_horizon", "06_closing_the_gap")
 
 
 def host() -> str:
-    cpu = ""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
     import torch
 
-    return (f"{platform.machine()} {cpu or platform.processor()}, {os.cpu_count()} cores, "
+    return (f"{platform.machine()} {cpu_model()}, {os.cpu_count()} cores, "
             f"python {platform.python_version()}, torch {torch.__version__}")
 
 

@@ -74,6 +74,10 @@ def metrics(dream=-0.215, real=-0.400, se=0.020, dream_tr=-0.285, real_tr=-0.400
             m.setdefault(f"{key}_size_se_{span}", whole_se if p_ * y_ >= 0 else math.hypot(pse, yse))
             m.setdefault(f"{key}_yaw_minus_position_{span}", abs(y_) - abs(p_))
             m.setdefault(f"{key}_yaw_minus_position_se_{span}", math.hypot(pse, yse))
+    # each world's rating with its own per-start standard error: reality's varies far less than the dream's
+    for span in ("train_horizon", "eval_horizon"):
+        m.setdefault(f"trained_dream_return_per_step_se_{span}", m[f"imagination_gap_se_{span}"])
+        m.setdefault(f"trained_real_return_per_step_se_{span}", 0.003)
     # the zero-action control: reality's zero-action rating is the same in every run (the same starts), the
     # dream's is that plus the drift
     m.setdefault("zero_action_dream_return_per_step", -0.45 + m["gap_drift_eval_horizon"])
@@ -310,7 +314,7 @@ def ensemble(dis=0.036, **kw):
 
 def test_the_delta_sentence_reads_ratios_horizons_and_the_runaway():
     s = nb06.delta_sentence(single(), delta())
-    assert "0.45/0.45 (x/y)" in s and "every dimension" in s and "1.40/1.40" in s
+    assert "0.45/0.45 (x/y)" in s and "every one of the 6 observation dimensions (its largest ratio" in s and "1.40/1.40" in s
     assert "-0.243 ± 0.035 (gloomier than reality" in s and "+0.108" in s and "changed sign" in s
     assert "rosy over the span the actor trained on and gloomy" in s
     assert "moves a block nobody touches" in s and "4.970 m off after 10 s" in s and "left the table" in s
@@ -321,7 +325,7 @@ def test_the_delta_sentence_reads_ratios_horizons_and_the_runaway():
     assert "gloomy over the span" in nb06.delta_sentence(single(), delta(dream_tr=-0.5, dream=-0.2))
     worse = delta()
     worse["wm_one_step_ratio_agent_x"] = 1.2
-    assert "on 5 of 6 dimensions" in nb06.delta_sentence(single(), worse)
+    assert "on 5 of 6 observation dimensions" in nb06.delta_sentence(single(), worse)
 
 
 def test_the_ensemble_sentence_reads_gaps_and_shared_bias():
@@ -351,9 +355,15 @@ def test_the_conclusion_reads_each_fix():
     assert "No fix produced a single real success" in c and "not beyond the noise and the minimum effect" in c
     # issue 38: a drift that went +0.230 -> -0.068 crossed zero: the opposite error, not a smaller one
     assert "the opposite error, not a smaller one" in c and "may have taught the model otherwise" not in c
-    fell = nb06.conclusion(loop([-0.215, -0.387], drift=0.05, drift_se=0.01), single(), delta(), ensemble())
+    rounds = loop([-0.215, -0.387], drift=0.05, drift_se=0.01, zero_dream_block_moved_eval_horizon=0.05)
+    rounds[0]["zero_dream_block_moved_eval_horizon"] = 0.2
+    fell = nb06.conclusion(rounds, single(), delta(), ensemble())
     assert "it fell beyond the noise and the minimum effect, against round 0" in fell
-    assert "may have taught the model otherwise" in fell
+    assert "may have taught the model otherwise: its zero-action dream now moves the untouched block 0.050 m" in fell
+    # issue 38, seed 12: the drift's size fell, but the control moves the untouched block farther: no such lesson
+    rounds[-1]["zero_dream_block_moved_eval_horizon"] = 0.26
+    worse = nb06.conclusion(rounds, single(), delta(), ensemble())
+    assert "The control says not" in worse and "may have taught" not in worse
     fixed = nb06.conclusion(loop([-0.215, -0.387], dream_tr=-0.395, training_tr=-0.05, training_tr_se=0.01),
                             single(), delta(), ensemble())
     assert "it counts as a fix of the gap" in fixed and "gloomier, not rosier" in fixed
@@ -525,7 +535,7 @@ def test_the_fixes_table_has_a_row_per_run():
     t = nb06.fixes_table(single(), rounds[-1], delta(), ensemble())
     rows = [ln for ln in t.splitlines() if ln.startswith("| ") and not ln.startswith("| run")]
     assert len(rows) == 4 and rows[1].startswith("| loop, after round 1")
-    assert "| 60% |" in rows[0] and "| 0.400 |" in rows[2] and "-0.065 ± 0.019" in rows[3]
+    assert "| 60% (neither half clearly larger) |" in rows[0] and "| 0.400 |" in rows[2] and "-0.065 ± 0.019" in rows[3]
 
 
 def test_the_summary_table_reads_every_seed_it_finds(tmp_path):
@@ -629,3 +639,14 @@ def test_the_dream_coming_down_is_read_against_the_dream_of_a_pusher_that_never_
     rounds[-1]["zero_action_dream_return_per_step"] = rounds[0]["zero_action_dream_return_per_step"]
     s = nb06.reconcile_text(rounds)
     assert "stopped promising what this policy does not deliver" in s and "-0.172 beyond the control's change" in s
+
+
+def test_a_gap_that_shrank_by_the_drift_turning_over_is_said_to_have():
+    # issue 38, seeds 11 and 12: the gap shrank because the drift went +0.16 -> -0.06, through zero
+    rounds = loop([-0.215, -0.387], drift=-0.064, drift_se=0.024)
+    s = nb06.reconcile_text(rounds)
+    assert "The gap shrank" in s and "through zero beyond the noise" in s and "trading its error" in s
+    assert "through zero" not in nb06.reconcile_text(loop([-0.215, -0.387], drift=0.05, drift_se=0.01))
+    # reality judged against its own noise: a fall of 0.031 with per-start SEs of 0.003 moved
+    rounds = loop([-0.215, -0.215], reals=[-0.400, -0.431])
+    assert nb06.sides(rounds[0], rounds[-1])["moved"]["real"] == "down"

@@ -240,9 +240,10 @@ def test_the_expert_control_is_read_only_where_standing_still_stands_still_in_th
         s = gap.expert_text(full_metrics(expert_dream=dream, zero_moved=0.21, expert_gap=-0.2), STEPS)
         assert "not valid on this run" in s and "21.0 cm" in s
         assert "it can recognise success" not in s and "less than standing still.**" not in s
-        assert "less than reality pays them" in s
-    assert "more than reality pays them" in gap.expert_text(full_metrics(zero_moved=0.5, expert_gap=0.1), STEPS)
-    assert "about what reality pays" in gap.expert_text(full_metrics(zero_moved=0.5, expert_gap=0.001), STEPS)
+        assert "the dream pays them less than reality does" in s and "-0.200 ± 0.010 per step" in s
+    assert "pays them more than reality does" in gap.expert_text(full_metrics(zero_moved=0.5, expert_gap=0.1), STEPS)
+    near = gap.expert_text(full_metrics(zero_moved=0.5, expert_gap=0.001), STEPS)
+    assert "not told apart from what reality pays" in near and "two errors cancel" in near   # drift +0.15, signal -0.2
     s = gap.expert_text(full_metrics(expert_dream=0.1, zero_moved=0.019), STEPS)      # within 2 cm: valid
     assert "it can recognise success" in s and "control is valid" in s
 
@@ -382,3 +383,15 @@ def test_drifting_toward_the_typical_pose_means_most_of_the_way_not_five_millime
     assert not gap.dream_drifts_to_data_position(dream_to_mean=0.005, real_to_mean=0.02, near=gap.SUCCESS_POS)
     assert not gap.dream_drifts_to_data_yaw(dream_to_mean_deg=70, real_to_mean_deg=90, near_deg=10)
     assert gap.dream_drifts_to_data_yaw(dream_to_mean_deg=30, real_to_mean_deg=90, near_deg=10)
+
+
+def test_exercise_one_prints_its_margin_and_says_when_a_seed_does_not_decide_it():
+    def m(diff, se):
+        return {"imagination_gap": 0.2, "imagination_gap_se_eval_horizon": 0.02, "gap_drift_eval_horizon": 0.1 + diff,
+                "gap_drift_se_eval_horizon": 0.03, "real_success_rate": 0.0, "zero_action_real_success_rate": 0.0,
+                "imagined_return_per_step": -0.2, "real_return_per_step": -0.4, "eval_episodes": 30,
+                "gap_drift_minus_half_gap_eval_horizon": diff, "gap_drift_minus_half_gap_se_eval_horizon": se}
+    letter, text = gap.ex1_reconciliation({0: m(0.08, 0.02), 1: m(0.06, 0.02)}, 30)
+    assert letter == "c" and "seed 0: |t| = 4.00 against k = 2.05" in text and "decided beyond the noise on every" in text
+    letter, text = gap.ex1_reconciliation({0: m(0.08, 0.02), 1: m(0.03, 0.02)}, 30)      # 1.5 SE on seed 1
+    assert "does not decide the letter beyond the noise" in text

@@ -25,14 +25,16 @@ why they are what they are):
   at least the minimum effect that matters, ``stats.MIN_REWARD_EFFECT`` (0.02 reward per step: the
   block held the 2 cm success tolerance nearer the target on every step). A gap **shrank** when its
   size fell by both, without ending on the other side of zero beyond the noise (that is a change of
-  sign: the opposite error). A **fix** needs that at both horizons, and a zero-action dream that
-  keeps the untouched block within ``ARENA_HALF`` of the target (:func:`fix_verdict`).
+  sign: the opposite error). A **fix** needs that at both horizons, a drift that does not turn into
+  the opposite error, and a zero-action dream that moves the untouched block no farther than the
+  reference's (:func:`fix_verdict`).
 * **Claims.** Every sentence that depends on the run is chosen by a registered claim
   (``pusht.nb.claims``, names "06.*"), so ``make claims`` records each one on every seed.
-* **Which world moved the gap.** The dream's and reality's ratings (reward per step) carry no
-  standard error of their own in the metrics. Their changes are compared with the same yardstick,
-  k standard errors of the gap's change: a noise scale measured on these starts, not a test of
-  either rating on its own; the sentences always state both numbers, so the reader can judge.
+* **Which world moved the gap.** The dream's and reality's ratings (reward per step) each carry
+  their own per-start standard error (``analysis.gap_split``), and each side's change is judged
+  against its own (:func:`sides`): reality varies far less from start to start than the dream, and
+  the gap's yardstick would hide a real change of reality. Whether the dream came down for this
+  policy or everywhere is read against the zero-action dream (:func:`policy_specific_words`).
 * **Counts** (real successes, episodes touching the block, out of the evaluation starts). A success
   is an event, not an estimate: one is enough to leave 0%, which is what Exercise 3 asks. Whether a
   rise could be luck is Fisher's exact test on the two counts (:func:`count_rise_p`), one-sided,
@@ -445,22 +447,23 @@ def _real_key(span: str) -> str:
 def sides(a: dict, b: dict, span: str = "eval_horizon") -> dict:
     """How each world's rating of the trained policy moved from run ``a`` to run ``b`` over ``span``.
 
-    The gap is the dream's rating minus reality's, so ``gap_diff == dream - real`` exactly. A side
-    counts as moved when its change exceeds ``yardstick``, k standard errors of the gap's change
-    (the module doc says why that scale), and is at least the minimum reward effect (claims
-    ``06.change_up``/``06.change_down``). Returns the changes, the yardstick and ``moved``, a dict
-    ``{"dream": "up"|"down"|"same", "real": ...}``."""
+    The gap is the dream's rating minus reality's, so ``gap_diff == dream - real`` exactly. Each side is
+    judged against its own noise: its change beyond k of its own standard errors (the two runs' per-start
+    standard errors in quadrature, as the gap's change is) and at least the minimum reward effect (claims
+    ``06.change_up``/``06.change_down``). Reality's rating varies far less from start to start than the
+    dream's, so the gap's yardstick would hide a real change of reality. Returns the changes, each side's
+    bar and ``moved``, a dict ``{"dream": "up"|"down"|"same", "real": ...}``."""
     c = fix_change(a, b, span)
-    d_dream = float(b[_dream_key(span)] - a[_dream_key(span)])
-    d_real = float(b[_real_key(span)] - a[_real_key(span)])
-    bar = c.k * c.se
-
-    def moved(d):
-        kw = dict(diff=d, se=c.se, k=c.k, min_effect=c.min_effect)
-        return "up" if change_up(**kw) else "down" if change_down(**kw) else "same"
-
-    return {"dream": d_dream, "real": d_real, "gap": c.diff, "yardstick": bar, "min_effect": c.min_effect,
-            "moved": {"dream": moved(d_dream), "real": moved(d_real)}}
+    out = {"gap": c.diff, "min_effect": c.min_effect, "moved": {}, "bar": {}}
+    for world, key in (("dream", _dream_key(span)), ("real", _real_key(span))):
+        se_key = key.replace("_return_per_step_", "_return_per_step_se_")
+        d = float(b[key] - a[key])
+        se = math.hypot(a[se_key], b[se_key])
+        kw = dict(diff=d, se=se, k=c.k, min_effect=c.min_effect)
+        out[world] = d
+        out["bar"][world] = c.k * se
+        out["moved"][world] = "up" if change_up(**kw) else "down" if change_down(**kw) else "same"
+    return out
 
 
 def _side_words(s: dict, a_name: str, b_name: str, a: dict, b: dict, span: str) -> str:
@@ -468,8 +471,8 @@ def _side_words(s: dict, a_name: str, b_name: str, a: dict, b: dict, span: str) 
     dk, rk = _dream_key(span), _real_key(span)
     text = (f"The dream's rating of the policy went from {a[dk]:+.3f} to {b[dk]:+.3f} per step ({s['dream']:+.3f}), "
             f"reality's from {a[rk]:+.3f} to {b[rk]:+.3f} ({s['real']:+.3f}), {a_name} to {b_name} "
-            f"(a side counts as moved beyond {s['yardstick']:.3f}, k standard errors of the gap's change, and by "
-            f"at least {s['min_effect']:.2f}, the minimum effect). ")
+            f"(each side counts as moved beyond k of its own standard errors, {s['bar']['dream']:.3f} for the dream "
+            f"and {s['bar']['real']:.3f} for reality, and by at least {s['min_effect']:.2f}, the minimum effect). ")
     dream, real = s["moved"]["dream"], s["moved"]["real"]
     word = {"up": "rose", "down": "came down"}
     if dream != "same" and real == "same":
@@ -729,6 +732,15 @@ def reconcile_text(rounds: list) -> str:
         s += "The gap's size did not fall beyond the noise and the minimum effect: it did not shrink."
     s += _sign_change_words(c, cl, "round 0", f"round {R}")
     lines.append(s)
+    # the control: did the gap shrink because the model's error with nobody pushing turned over?
+    d0, d0se = first["gap_drift_eval_horizon"], first["gap_drift_se_eval_horizon"]
+    d1, d1se = last["gap_drift_eval_horizon"], last["gap_drift_se_eval_horizon"]
+    if cl["shrank"] and drift_crossed_zero(first=d0, first_se=d0se, last=d1, last_se=d1se, k=c.k):
+        lines.append(f"The control says how: the drift, the dream's error with a pusher that never moves, went "
+                     f"{_pm(d0, d0se)} -> {_pm(d1, d1se)}, through zero beyond the noise, while the part of the gap "
+                     f"that is this policy's own (gap minus drift) went {c.first - d0:+.3f} -> {c.last - d1:+.3f}. The "
+                     "gap shrank by the model trading its error with nobody pushing for the opposite one, not by "
+                     "learning what this policy does.")
     sd = sides(first, last)
     lines.append(_side_words(sd, "round 0", f"round {R}", first, last, "eval_horizon").strip())
     if cl["shrank"] and sd["moved"] == {"dream": "down", "real": "same"}:
@@ -1206,9 +1218,13 @@ def delta_sentence(state_m: dict, delta_m: dict) -> str:
     s = (f"On held-out expert data, the delta model's block position error is {fmt(r['delta']['one_step'])} (x/y) "
          f"of copy-last's one step ahead and {fmt(r['delta']['open_loop'])} open-loop; the state model's "
          f"{fmt(r['state']['one_step'])} and {fmt(r['state']['open_loop'])}. ")
-    s += ("One step ahead it beats copy-last on every dimension. " if beats_copy_last_everywhere(ratios=all_dims) else
+    worst = max(range(len(all_dims)), key=lambda i: all_dims[i] if np.isfinite(all_dims[i]) else math.inf)
+    s += ((f"One step ahead it beats copy-last on every one of the {len(all_dims)} observation dimensions (its "
+           f"largest ratio, on {OBS_NAMES[worst]}, is {all_dims[worst]:.2f}). ")
+          if beats_copy_last_everywhere(ratios=all_dims) else
           f"One step ahead it beats copy-last on {sum(np.isfinite(x) and x < 1 for x in all_dims)} of "
-          f"{len(all_dims)} dimensions. ")
+          f"{len(all_dims)} observation dimensions (the worst, {OBS_NAMES[worst]}, at {all_dims[worst]:.2f} of "
+          "copy-last's error). ")
     words = {}
     for span in SPAN_KEYS:
         g, se = delta_m[f"imagination_gap_{span}"], delta_m[f"imagination_gap_se_{span}"]
@@ -1291,7 +1307,7 @@ def ensemble_sentence(single_m: dict, ens_m: dict, penalty: float | None = None,
     s += (f"Reality pays its policy {ens_m[_real_key('eval_horizon')]:+.3f} per step, the single model's "
           f"{single_m[_real_key('eval_horizon')]:+.3f} ({sd['real']:+.3f}; "
           + ("not moved by" if sd["moved"]["real"] == "same" else "moved beyond")
-          + f" the yardstick of {sd['yardstick']:.3f} and the minimum effect); real successes {successes(ens_m)}/{n} "
+          + f" k of its own standard errors ({sd['bar']['real']:.3f}) and the minimum effect); real successes {successes(ens_m)}/{n} "
           f"against {successes(single_m)}/{n}. ")
     if "wm_ensemble_disagreement_train_horizon" not in ens_m:
         return s + "These metrics hold no ensemble disagreement (a single model has none)."
@@ -1344,12 +1360,27 @@ def _fix_line(name: str, ref: dict, fix: dict, ref_name: str) -> str:
     real = (f"In reality the policy earns {fix[_real_key('eval_horizon')]:+.3f} per step against "
             f"{ref[_real_key('eval_horizon')]:+.3f} ("
             + ("not moved by" if sd["moved"]["real"] == "same" else "moved beyond")
-            + f" the yardstick of {sd['yardstick']:.3f} and the minimum effect) and succeeds {successes(fix)}/{n} "
+            + f" k of its own standard errors ({sd['bar']['real']:.3f}) and the minimum effect) and succeeds {successes(fix)}/{n} "
             f"times against {successes(ref)}/{n}.")
     p, _, y, _ = _halves(fix)
     halves = f"Its gap's halves over the whole evaluation: position {p:+.3f}, yaw {y:+.3f}."
     nums, ex = expert_words(fix)
     return f"**{name}**: {verdict} {halves} {real} Expert control ({nums}): {ex}."
+
+
+def _share_cell(m: dict) -> str:
+    """The yaw share of a run's gap, and "neither half clearly larger" where the halves' test says so: a
+    share of 95% read alone would say the yaw half dominates when the noise cannot tell."""
+    return f"{yaw_share(m):.0%}" + (" (neither half clearly larger)" if _order(m) == "neither" else "")
+
+
+def _expert_cell(m: dict) -> str:
+    """The dream's expert signal, and "control invalid" where the zero-action dream moves the untouched
+    block beyond the success tolerance (claim ``06.zero_control_valid``)."""
+    ok = EXPERT_CONTROL["valid"](moved=m["zero_dream_block_moved_eval_horizon"], tol=SUCCESS_POS)
+    return (_pm(m["expert_signal_dream_eval_horizon"], m["expert_signal_dream_se_eval_horizon"])
+            + ("" if ok else " (control invalid: the zero-action dream moves the block "
+                             f"{m['zero_dream_block_moved_eval_horizon']:.2f} m)"))
 
 
 def fixes_table(state_m: dict, loop_last_m: dict, delta_m: dict, ens_m: dict) -> str:
@@ -1369,10 +1400,9 @@ def fixes_table(state_m: dict, loop_last_m: dict, delta_m: dict, ens_m: dict) ->
         rows.append("| " + " | ".join([
             name, _pm(m["imagination_gap_train_horizon"], m["imagination_gap_se_train_horizon"]),
             _pm(m["imagination_gap_eval_horizon"], m["imagination_gap_se_eval_horizon"]),
-            f"{p:+.3f} / {y:+.3f}", f"{yaw_share(m):.0%}",
+            f"{p:+.3f} / {y:+.3f}", _share_cell(m),
             _pm(m["gap_drift_eval_horizon"], m["gap_drift_se_eval_horizon"]),
-            f"{m['zero_action_dream_final_tee_dist']:.3f}",
-            _pm(m["expert_signal_dream_eval_horizon"], m["expert_signal_dream_se_eval_horizon"]),
+            f"{m['zero_action_dream_final_tee_dist']:.3f}", _expert_cell(m),
             f"{successes(m)}/{int(m['eval_episodes'])}"]) + " |")
     rows.append("")
     rows.append("Reward per step, ± one standard error over the evaluation starts. Yaw share: |yaw half| / "
@@ -1476,9 +1506,18 @@ def conclusion(rounds: list, state_m: dict, delta_m: dict, ens_m: dict) -> str:
                           "moves went from too rosy to too gloomy, the opposite error, not a smaller one. ",
                   "same": "not changed beyond the noise and the minimum effect. "}[d])
     pc, ec = last["wm_policy_one_step_block_copy_err"], last["wm_expert_one_step_block_copy_err"]
+    z0, z1 = first["zero_dream_block_moved_eval_horizon"], last["zero_dream_block_moved_eval_horizon"]
+    if d in ("down", "same") and not flipped and d0se > 0 and dc.first * dc.last < 0:
+        causal += "(Its sign did change, though not beyond the noise.) "
     if d == "down" and pc < ec:
-        causal += (f"The policy's data, in which the block moves less (copy-last's one-step block error is "
-                   f"{_mm(pc)} on them, {_mm(ec)} on the expert's), may have taught the model otherwise. ")
+        if z1 < z0 - SUCCESS_POS:
+            causal += (f"The policy's data, in which the block moves less (copy-last's one-step block error is "
+                       f"{_mm(pc)} on them, {_mm(ec)} on the expert's), may have taught the model otherwise: its "
+                       f"zero-action dream now moves the untouched block {z1:.3f} m, against {z0:.3f} m in round 0. ")
+        else:
+            causal += (f"Did the policy's data teach the model that an untouched block stays put? The control says "
+                       f"not: its zero-action dream moves the untouched block {z1:.3f} m, against {z0:.3f} m in round "
+                       "0 (a real one does not move). ")
     causal += ("Whether a model has the cause right is tested only by data where the cause and its usual "
                "companions come apart.")
     open_.append(causal)
@@ -1556,9 +1595,8 @@ def summary_table(out_dir) -> str:
                 str(seed), label,
                 _pm(m["imagination_gap_eval_horizon"], m["imagination_gap_se_eval_horizon"]),
                 _pm(m["gap_drift_eval_horizon"], m["gap_drift_se_eval_horizon"]),
-                "n/a" if math.isnan(share) else f"{share:.0%}",
-                f"{successes(m)}/{int(m['eval_episodes'])}",
-                _pm(m["expert_signal_dream_eval_horizon"], m["expert_signal_dream_se_eval_horizon"]),
+                "n/a" if math.isnan(share) else _share_cell(m),
+                f"{successes(m)}/{int(m['eval_episodes'])}", _expert_cell(m),
                 str(m.get("round", "")) if kind == "loop" else ""]) + " |")
     seeds = list(runs)
     text = [f"Seeds found under `{out_dir}`: {', '.join(str(s) for s in seeds)} ({len(seeds)} seed"
@@ -1590,8 +1628,9 @@ def _legend_below(ax, ncol=2, y=-0.2):
 def fig_rounds(rounds: list):
     """Left: the gap per round over the training horizon and over the whole evaluation, ± one
     standard error over the starts. Middle: the gap's position and yaw halves per round (whole
-    evaluation). Right: the dream's and reality's rating per round (whole evaluation), with each
-    round's real successes under its round number. Legends sit under the axes."""
+    evaluation). Right: the dream's and reality's rating per round (whole evaluation), the zero-action
+    dream beside them as the control, with each round's real successes under its round number. Legends
+    sit under the axes."""
     import matplotlib.pyplot as plt
 
     x = np.array([m["round"] for m in rounds], dtype=float)
@@ -1623,6 +1662,10 @@ def fig_rounds(rounds: list):
     ax.plot(x, _series(rounds, _dream_key("eval_horizon")), "o-", color=WORLD_COLORS["dream"], lw=2,
             label="in the dream")
     ax.plot(x, _series(rounds, _real_key("eval_horizon")), "s-", color=WORLD_COLORS["real"], lw=2, label="in reality")
+    # the control: the same dream for a pusher that never moves; if it falls as far, the dream did not come
+    # down for this policy
+    ax.plot(x, _series(rounds, "zero_action_dream_return_per_step"), "^:", color=WORLD_COLORS["dream"], lw=1.5,
+            label="control: the dream of a pusher that never moves")
     ax.set_ylabel("mean reward per step\n(0 = block on target)")
     ax.set_title(f"Both worlds' ratings ({_steps(last, 'eval_horizon')};\nthe gap is dream minus reality)")
     _round_axis(ax, rounds)

@@ -89,7 +89,7 @@ COUNT_P = (1 - LEVEL) / 2
 
 
 @claim("04.ex1_letter_decided", "Exercise 1's letter is decided beyond the noise: on every seed compared, the drift is "
-       "farther from half the gap than k of its standard errors", control="zero actions")
+       "farther from half the gap than k standard errors of their difference (start by start)", control="zero actions")
 def ex1_letter_decided(*, diffs, ses, ks):
     return all(abs(d) > kk * se for d, se, kk in zip(diffs, ses, ks))
 
@@ -287,29 +287,46 @@ def register_expert_control(nb: str) -> dict:
 
 
 EXPERT_CONTROL = register_expert_control("04")
+# The span a number was measured over, in words ("within the first 15 steps"), from a run's metrics.
+SPAN_WORDS = {"train_horizon": lambda m: (f"within the first {int(m['imag_horizon'])} steps" if "imag_horizon" in m
+                                          else "within the actor's training horizon"),
+              "eval_horizon": lambda m: (f"over the whole evaluation ({int(m['eval_horizon'])} steps)"
+                                         if "eval_horizon" in m else "over the whole evaluation")}
 
 
 def expert_control_words(m: dict, span: str, k: float, claims: dict = EXPERT_CONTROL) -> tuple[bool, str]:
     """``(valid, words)``: is the expert-minus-zero-actions control valid over ``span`` (claims
     ``*.zero_control_valid``), and, valid or not, the expert's own gap in words (claims
-    ``*.dream_overpays_expert``/``_underpays_expert``): the reading that needs no zero-action control."""
+    ``*.dream_overpays_expert``/``_underpays_expert``): the reading that needs no zero-action control. The
+    expert's own gap is the drift (what the dream overpays standing still) plus the dream's expert signal
+    minus reality's; where those two parts cancel, a gap near zero is said to be a cancellation."""
+    where = SPAN_WORDS[span](m)
     moved = m[f"zero_dream_block_moved_{span}"]
     ok = claims["valid"](moved=moved, tol=SUCCESS_POS)
     g, gse = m[f"expert_gap_{span}"], m[f"expert_gap_se_{span}"]
     kw = dict(value=g, se=gse, k=k, min_effect=MIN_REWARD_EFFECT)
-    own = (f"the dream pays the expert's own pushes {g:+.3f} ± {gse:.3f} per step "
-           + ("more than reality pays them, beyond the noise and the minimum effect" if claims["over"](**kw) else
-              "less than reality pays them, beyond the noise and the minimum effect" if claims["under"](**kw) else
-              "against reality's pay, not beyond the noise and the minimum effect: about what reality pays"))
+    over, under = claims["over"](**kw), claims["under"](**kw)
+    head = f"the expert's own gap, what the dream pays its pushes minus what reality pays them {where}, is {g:+.3f} ± {gse:.3f} per step: "
+    if over:
+        own = head + "the dream pays them more than reality does, beyond the noise and the minimum effect"
+    elif under:
+        own = head + "the dream pays them less than reality does, beyond the noise and the minimum effect"
+    else:
+        own = head + "not told apart from what reality pays, by the noise and the minimum effect"
+        drift = m.get(f"gap_drift_{span}")
+        sig = m[f"expert_signal_dream_{span}"] - m[f"expert_signal_real_{span}"]
+        if drift is not None and drift * sig < 0 and min(abs(drift), abs(sig)) >= MIN_REWARD_EFFECT:
+            own += (f"; but only because two errors cancel: the dream overpays standing still by {drift:+.3f} and, "
+                    f"against standing still, pays the expert's pushes {sig:+.3f} against reality's")
     if ok:
         return True, (f"With zero actions the dream moves the untouched block {moved * 100:.1f} cm at most on average "
-                      f"(within the {SUCCESS_POS * 100:.0f} cm success tolerance), so standing still stands still in "
-                      f"the dream too and the control is valid. Beside it, {own}.")
+                      f"{where} (within the {SUCCESS_POS * 100:.0f} cm success tolerance), so standing still stands "
+                      f"still in the dream too and the control is valid. Beside it, {own}.")
     return False, (f"**This control is not valid on this run**: with zero actions the dream carries the untouched "
-                   f"block {moved * 100:.1f} cm on average (the largest displacement of each start, averaged), more "
-                   f"than the {SUCCESS_POS * 100:.0f} cm success tolerance, where a real untouched block does not "
+                   f"block {moved * 100:.1f} cm on average {where} (the largest displacement of each start, averaged), "
+                   f"more than the {SUCCESS_POS * 100:.0f} cm success tolerance, where a real untouched block does not "
                    "move. \"More than standing still\" then compares the expert with a block the dream moves by "
-                   "itself, and cannot say whether the dream recognises success. The reading that needs no such "
+                   f"itself, and cannot say whether the dream recognises success. The reading that needs no such "
                    f"control: {own}.")
 
 
@@ -322,13 +339,13 @@ def _term_args(m: dict, key: str, span: str, half: str = "") -> tuple[float, flo
 # --- Exercise 1 ---------------------------------------------------------------------------------
 EX1_OPTIONS = {
     "a": "It transfers: real successes appear, more of them than a pusher that never moves gets by chance.",
-    "b": "No real success, and the dream rates the trained policy well above reality; the rosy "
+    "b": "No real success beyond chance, and the dream rates the trained policy well above reality; the rosy "
          "part comes with the actor's actions (a pusher that never moves would be rated about as "
          "reality rates it).",
-    "c": "No real success, and the dream rates the trained policy well above reality; but it is "
+    "c": "No real success beyond chance, and the dream rates the trained policy well above reality; but it is "
          "rosy even for a pusher that never moves (zero actions already get at least half of the "
          "trained policy's gap).",
-    "d": "No real success, and the dream is no rosier than reality.",
+    "d": "No real success beyond chance, and the dream is no rosier than reality.",
 }
 
 
@@ -421,15 +438,16 @@ def ex1_reconciliation(metrics: dict, n_eval: int) -> tuple[str, str]:
     ``python -m pusht.exercise ex1`` print the same words."""
     # the letter turns on "the drift is at least half the gap": its margin, per seed, in the drift's own
     # standard errors (drift minus half the gap, against k)
-    diffs = [m["gap_drift_eval_horizon"] - 0.5 * m["imagination_gap"] for m in metrics.values()]
-    ses = [m["gap_drift_se_eval_horizon"] for m in metrics.values()]
+    diffs = [m["gap_drift_minus_half_gap_eval_horizon"] for m in metrics.values()]
+    ses = [m["gap_drift_minus_half_gap_se_eval_horizon"] for m in metrics.values()]
     ks = [_k(m, n_eval) for m in metrics.values()]
     decided = ex1_letter_decided(diffs=diffs, ses=ses, ks=ks)
     margins = "; ".join(f"seed {s}: |t| = {abs(d) / se:.2f} against k = {k:.2f}"
                         for s, d, se, k in zip(metrics, diffs, ses, ks))
     return (ex1_verdict(list(metrics.values())),
             "\n".join(ex1_sentence(s, m, n_eval) for s, m in metrics.items()) + "\n" + ex1_note(n_eval)
-            + "\nThe letter's margin (the drift minus half the gap, in the drift's standard errors): " + margins
+            + "\nThe letter's margin (the drift minus half the gap, start by start, in its own standard errors): "
+            + margins
             + (": decided beyond the noise on every seed." if decided else
                ": on some seed the drift is within the noise of half the gap, so that seed does not decide the "
                "letter beyond the noise."))
@@ -464,7 +482,12 @@ def exploitation_text(metrics: dict, H: int, n: int | None = None) -> str:
                          "exploit its dream",
                 "none": "that is within the noise: training did not make the dream measurably rosier than "
                         "reality, and this actor did not measurably exploit its dream",
-            }["none" if r == "up" else r]
+            }["none" if r == "up" else r].replace("this actor did", f"within those {H} steps this actor did")
+            ve, vse = m["gap_training_eval_horizon"], m["gap_training_se_eval_horizon"]
+            if training_exploits_eval(value=ve, se=vse, k=k, min_effect=MIN_REWARD_EFFECT):
+                verdict += (f"; over the whole evaluation, though, training's part is {ve:+.3f} ± {vse:.3f}, clearly "
+                            "positive: past the steps its gradient saw, the trained actor's dream is rosier against "
+                            "reality than the untrained one's")
         lines.append(f"* seed {seed}: within the first {H} steps, training's part of the gap is "
                      f"**{v:+.3f}** ± {se:.3f} per step; {verdict}.")
     return ("**What your run shows.** Whether the actor exploited its dream is measured by the *training* "
@@ -645,10 +668,10 @@ def split_story(m: dict, H: int, rollouts: dict | None = None, n: int | None = N
             "down": "training made the dream *gloomier* than it made reality, beyond the noise and the minimum "
                     "effect, so on this seed the actor did not exploit its dream. ",
             "small": f"beyond the noise ({_ratio(tr_h, se_h, k)} standard errors) but smaller than the minimum effect "
-                     "that matters, so it is not read as exploitation: on this seed the actor did not measurably "
-                     "exploit its dream. ",
+                     f"that matters, so it is not read as exploitation: within those {H} steps the actor did not "
+                     "measurably exploit its dream. ",
             "none": f"within the noise (it would count when {words}): training did not make the dream measurably "
-                    "rosier than reality, and on this seed the actor did not measurably exploit its dream. ",
+                    f"rosier than reality, and within those {H} steps the actor did not measurably exploit its dream. ",
             "up": ""}[r]
     exploits_e = training_exploits_eval(value=tr_e, se=se_e, k=k, min_effect=MIN_REWARD_EFFECT)
     re_ = "up" if exploits_e else reading(tr_e, se_e, k, "training eval_horizon, story")

@@ -524,9 +524,20 @@ def mechanism_text(training: dict, dream_gain: dict, real_gain: dict, training_o
                   "positive).")
         lines.append(s)
     if mech["long_exploits"]:
-        lines.append(f"Measured mechanism: exploitation grew with the horizon. At {hi} steps the training term is "
-                     "clearly positive: training made the dream rate the policy above what it did to it in reality, "
-                     f"and more so than at {lo} steps (more steps of the dream to optimise against).")
+        # the training term is the dream's side minus reality's: which side carried its rise?
+        d_dream = float(np.mean(dream_gain[hi]) - np.mean(dream_gain[lo]))
+        d_real = float(np.mean(real_gain[hi]) - np.mean(real_gain[lo]))
+        sides_ = (f"of its rise from {lo} to {hi} steps, {d_dream:+.3f} is the dream's side and {-d_real:+.3f} "
+                  "reality's (training term = dream's gain minus reality's)")
+        if d_dream >= abs(d_real):
+            lines.append(f"Measured mechanism: exploitation grew with the horizon. At {hi} steps the training term is "
+                         "clearly positive: training made the dream rate the policy above what it did to it in "
+                         f"reality, and more so than at {lo} steps; {sides_}: most of the rise is the dream paying "
+                         "the longer-horizon actors more.")
+        else:
+            lines.append(f"Measured: at {hi} steps the training term is clearly positive and it rose from {lo} steps, "
+                         f"but {sides_}: most of the rise is the longer-horizon actors doing worse in reality, not "
+                         "the dream paying them more, so it is not read as exploitation growing.")
     if mech["short_exploits"]:
         lines.append(f"Measured mechanism: at {lo} steps training made the dream clearly rosier than reality, and "
                      f"longer training dreams took that back: the {hi}-step actors exploit the dream less.")
@@ -650,7 +661,15 @@ def terms_sentence(terms: dict, imagined: dict, untrained: dict) -> str:
         s += (f": neither beyond the spread across {n} actor seeds (paired t-test, {_tk(te)}) nor as large as the "
               f"minimum effect that matters ({MIN_REWARD_EFFECT:.3f}), so no change of the dream's rating by training "
               "is seen. ")
-    return s
+    t_lo, _ = judge_sign("training", terms["training"][lo])
+    s += (f"(That difference is the dream's side alone; the {lo}-step training term above is it minus reality's side, "
+          "a different quantity with its own spread across seeds.")
+    thin = [name for name, x in ((f"the {lo}-step training term", t_lo), ("the dream's side", te))
+            if not clear_of_threshold(x.ratio, x.k)]
+    if thin:
+        s += (f" The verdict on {' and on '.join(thin)} sits within 10% of its threshold (|t| against k): a rerun "
+              "with other actor seeds could read it either way.")
+    return s + ") "
 
 
 def halves_sentence(gap_position: dict, gap_yaw: dict, drift_position: dict, drift_yaw: dict,
@@ -674,7 +693,9 @@ def halves_sentence(gap_position: dict, gap_yaw: dict, drift_position: dict, dri
     yaw = [h for h in hs if larger[h] == "up"]
     pos = [h for h in hs if larger[h] == "down"]
     rest = [h for h in hs if h not in yaw and h not in pos]
-    rule = "one-sample t-test on each seed's |yaw| minus |position|, and at least the minimum effect"
+    rule = ("one-sample t-test on each seed's |yaw| minus |position|, and at least the minimum effect; the noise here is "
+            "the spread across actor seeds on the same starts, so notebooks 04 and 06, which judge one run against the "
+            "spread across its starts, can find neither half clearly larger for the same model")
     if len(yaw) == len(hs):
         s += f"At every horizon the yaw half is the larger ({rule}): most of the gap is about how the block is turned, not where it is. "
     elif len(pos) == len(hs):
@@ -811,8 +832,9 @@ def block_sentence(dream_final: dict, real_final: dict, spawn: float, curves: di
             s += (f"{'After' if not pushed else 'But after'} training with {steps(rest)} dreams the dreamed block "
                   f"does not end clearly nearer than the block of a pusher that never moves, which the dream "
                   f"carries to {zero_final:.3f} m from the target by itself ({bar}): "
-                  + ("the block comes in on its own, by the model's drift (notebook 04), not by the pushing. "
-                     if zero_final < spawn - MIN_DIST_EFFECT else
+                  + ("in distance to the target the block comes in on its own, by the model's drift (notebook "
+                     "04), not by the pushing (how the block is turned, the reward's other half, is a separate "
+                     "matter). " if zero_final < spawn - MIN_DIST_EFFECT else
                      "the pushing is not what brought it in. "))
     if curves:
         best = {h: closest_approach(np.mean(curves[h]["dream"], axis=0), dt) for h in hs}

@@ -51,28 +51,20 @@ def estimate(notebook: str, path: Path = TIMES) -> str:
             "with nothing else running on it, and running the notebooks in order so that each reuses the models "
             "the earlier ones trained and cached. That is a quiet machine's figure. On a busy or shared one (a "
             "class server, a laptop compiling something, a free Colab runtime on shared hardware) it takes "
-            "longer: the training here is arithmetic on the CPU, and every other program that wants those cores "
-            "takes its share of them (one busy program per core roughly halves what the notebook gets). More "
-            "cores train seeds side by side and go faster; `SMOKE = True` runs in seconds. Your own reading "
-            "and writing time comes on top.")
+            "longer, and can take several times as long: the training here is arithmetic on the CPU, every "
+            "other program that wants those cores takes its share of them, and the notebooks that train several "
+            "runs side by side (05, 06) lose most when the cores are already busy. More cores train seeds side "
+            "by side and go faster; `SMOKE = True` runs in seconds. Your own reading and writing time comes on "
+            "top.")
 
 
 def here() -> str:
     """"on this machine (Intel Xeon, 2 cores)": where a time printed in a notebook was measured, since a
     wall-clock time means nothing without its machine (and what else was running on it)."""
-    import os
-    import platform
+    from ..host import cores, cpu_model
 
-    cpu = ""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    cpu = cpu or platform.processor() or platform.machine() or "unknown CPU"
-    n = os.cpu_count() or 1
+    cpu = cpu_model()
+    n = cores()
     return f"on this machine ({cpu}, {n} core{'s' if n != 1 else ''}, with whatever else runs on it)"
 
 
