@@ -136,3 +136,13 @@ def test_the_recorded_table_lists_each_causal_claims_control():
     for name, c in claims.load_all().items():
         if c.control:
             assert f"| `{name}` | {'fixed' if c.fixed else 'guarded'} | {c.control} |" in md, name
+
+
+def test_numbers_named_as_different_quantities_are_not_one_quantity():
+    # reality's change and the gap's change are equal in size when the dream's side did not move at all:
+    # two quantities, each judged against its own noise, not one number judged twice
+    real = {"claim": "06.change_down", "notebook": "06", "seed": 0, "holds": True,
+            "inputs": {"diff": -0.06, "se": 0.001, "k": 2.05, "min_effect": 0.02, "quantity": "real rating"}}
+    gap = {**real, "claim": "06.change_up", "inputs": {"diff": 0.06, "se": 0.1, "k": 2.05, "min_effect": 0.02}}
+    assert claims.conflicts([real, gap]) == []
+    assert claims.conflicts([real, {**gap, "inputs": {**gap["inputs"], "quantity": "real rating"}}])

@@ -151,14 +151,16 @@ MEASURED = (("value", "se"), ("first", "first_se"), ("last", "last_se"), ("first
 
 
 def measurements(inputs: dict) -> list[tuple[float, float, float | None, float | None]]:
-    """The numbers a claim's evaluation judged against their noise: ``(|value|, se, k, min_effect)``
-    for each pair of :data:`MEASURED` in ``inputs`` (k and min_effect None where the claim has none)."""
+    """The numbers a claim's evaluation judged against their noise: ``(|value|, se, k, min_effect, what)``
+    for each pair of :data:`MEASURED` in ``inputs`` (k and min_effect None where the claim has none; ``what``
+    the quantity's name where the claim was given one (input ``quantity``), else None)."""
     out = []
+    label = inputs.get("quantity") or None       # a claim may name its quantity: two names, two quantities
     for v, e in MEASURED:
         if (v, e) == ("gap", "se") and "drift" in inputs:     # drift_half_of_gap: the se is the drift's
             continue
         if v in inputs and e in inputs and finite(inputs[v], inputs[e]):
-            out.append((abs(float(inputs[v])), float(inputs[e]), inputs.get("k"), inputs.get("min_effect")))
+            out.append((abs(float(inputs[v])), float(inputs[e]), inputs.get("k"), inputs.get("min_effect"), label))
     return out
 
 
@@ -173,10 +175,12 @@ def conflicts(records: list[dict], rel: float = 1e-9) -> list[str]:
     bad = []
     for r in records:
         run = (r.get("notebook", r["claim"].split(".", 1)[0]), r.get("seed"))
-        for size, se, k, eff in measurements(r["inputs"]):
+        for size, se, k, eff, label in measurements(r["inputs"]):
             if size == 0:
                 continue
-            for other_size, other_se, ok, oeff, name in seen.get(run, []):
+            for other_size, other_se, ok, oeff, olabel, name in seen.get(run, []):
+                if label != olabel:         # named as two different quantities (or one named, one not)
+                    continue
                 if abs(size - other_size) <= rel * max(size, other_size):
                     same = (abs(se - other_se) <= rel * max(se, other_se, 1e-300)
                             and (k is None or ok is None or abs(k - ok) <= rel * max(k, ok))
@@ -184,5 +188,5 @@ def conflicts(records: list[dict], rel: float = 1e-9) -> list[str]:
                     if not same:
                         bad.append(f"{run[0]} seed {run[1]}: {name} and {r['claim']} judge {size:.6g} with "
                                    f"(se {other_se:.6g}, k {ok}, min {oeff}) and (se {se:.6g}, k {k}, min {eff})")
-            seen.setdefault(run, []).append((size, se, k, eff, r["claim"]))
+            seen.setdefault(run, []).append((size, se, k, eff, label, r["claim"]))
     return bad

@@ -162,12 +162,12 @@ def gap_reopened(*, sizes, ses, k, min_effect):
 
 
 @claim("06.change_up", "the quantity rose beyond k standard errors and by at least the minimum effect", control="round 0")
-def change_up(*, diff, se, k, min_effect):
+def change_up(*, diff, se, k, min_effect, quantity=""):
     return _test_outcome(diff, k * se, min_effect) == "up"
 
 
 @claim("06.change_down", "the quantity fell beyond k standard errors and by at least the minimum effect", control="round 0")
-def change_down(*, diff, se, k, min_effect):
+def change_down(*, diff, se, k, min_effect, quantity=""):
     return _test_outcome(diff, k * se, min_effect) == "down"
 
 
@@ -459,7 +459,7 @@ def sides(a: dict, b: dict, span: str = "eval_horizon") -> dict:
         se_key = key.replace("_return_per_step_", "_return_per_step_se_")
         d = float(b[key] - a[key])
         se = math.hypot(a[se_key], b[se_key])
-        kw = dict(diff=d, se=se, k=c.k, min_effect=c.min_effect)
+        kw = dict(diff=d, se=se, k=c.k, min_effect=c.min_effect, quantity=f"{world} rating")
         out[world] = d
         out["bar"][world] = c.k * se
         out["moved"][world] = "up" if change_up(**kw) else "down" if change_down(**kw) else "same"
