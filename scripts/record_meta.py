@@ -4,6 +4,7 @@
                                              # + the tolerance bands (fresh process per code path)
     python scripts/record_meta.py --tolerance-only   # re-measure only the bands, keep the rest
     python scripts/record_meta.py --closing-only     # re-measure only notebook 06's loop and fixes
+    python scripts/record_meta.py --seeds-only       # re-measure only the seeds block (same platform)
 
 Every number in meta.yaml comes from this script's runs; the chapter page's own figures are stored
 beside ours (under ``page``) so a reader can compare, never mixed into them. The determinism test
@@ -430,6 +431,9 @@ def main(argv=None):
                    help="actor seeds per horizon of the sweep (on the world model of seed 0)")
     p.add_argument("--tolerance-only", action="store_true",
                    help="re-measure only the tolerance section of an existing --out")
+    p.add_argument("--seeds-only", action="store_true",
+                   help="re-measure only the seeds block (and its acceptance) of an existing --out: after the "
+                        "evaluation gains metrics, on the platform meta.yaml was recorded on")
     p.add_argument("--closing-only", action="store_true",
                    help="re-measure only notebook 06's section (the loop and the two fixes) of an existing --out")
     p.add_argument("--closing-worker", type=int, help=argparse.SUPPRESS)
@@ -445,6 +449,16 @@ def main(argv=None):
         return
     if args.closing_worker is not None:
         _closing_worker(args.closing_worker)
+        return
+    if args.seeds_only:
+        record = yaml.safe_load(args.out.read_text())
+        if platform_fingerprint() != record["platform"]:
+            raise SystemExit("--seeds-only keeps the tolerance bands and the sweep, which were measured on "
+                             "meta.yaml's platform; this is another one: run the whole script")
+        for seed in args.seeds:
+            record["seeds"][seed] = run(make_config(seed=seed), log=None).metrics
+        record["acceptance"] = {seed: acceptance(m) for seed, m in record["seeds"].items()}
+        write_meta(record, args.out)
         return
     if args.closing_only:
         record = yaml.safe_load(args.out.read_text())
