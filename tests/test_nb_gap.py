@@ -77,7 +77,9 @@ def test_the_sentences_read_the_run_they_are_given(smoke):
     assert f"{m['real_pusher_at_wall_share']:.0%}" in gap.shift_sentence(m)
     assert "seed 0's" in gap.seeds_sentence({0: m})
     table = gap.seeds_table({0: m, 1: m})
-    assert table.count("\n") == 3 and f"{m['imagination_gap_yaw_eval_horizon']:+.3f}" in table
+    rows = [line for line in table.splitlines() if line.startswith("|")]
+    assert len(rows) == 4 and f"{m['imagination_gap_yaw_eval_horizon']:+.3f}" in table
+    assert any("(invalid)" in r for r in rows[2:]) == (m["zero_dream_block_moved_train_horizon"] > gap.SUCCESS_POS)
     s = gap.dip_sentence(r, cfg.imag_horizon, smoke.data.mean)
     assert "yaw" in s and f"{gap.typical_pose(smoke.data.mean)[0]:.3f} m" in s
     s = gap.expert_text(m, steps)

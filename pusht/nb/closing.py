@@ -714,7 +714,9 @@ def reconcile_text(rounds: list) -> str:
              f"{_pm(c.first, first['imagination_gap_se_eval_horizon'])}, after round {R} "
              f"{_pm(c.last, last['imagination_gap_se_eval_horizon'])} (imagined minus real reward per step)."]
     per_round = ", ".join(f"{m['imagination_gap_eval_horizon']:+.3f}" for m in rounds)
-    lines.append(f"Round by round: {per_round}. " + reopen_words(rounds))
+    gap_path = path_words([abs(m["imagination_gap_eval_horizon"]) for m in rounds])
+    lines.append(f"Round by round: {per_round}" + (f" (its size {gap_path})" if gap_path and len(rounds) > 2 else "")
+                 + ". " + reopen_words(rounds))
     s = (f"The change is {c.diff:+.3f} ± {_se(c.se)} ({_ratio_words(c)}; the minimum effect that matters is "
          f"{c.min_effect:.2f} per step). The standard error adds the two rounds' per-start standard errors in "
          "quadrature, as if the rounds had used independent starts; they used the same ones, so this is "
@@ -722,6 +724,10 @@ def reconcile_text(rounds: list) -> str:
     if cl["shrank"]:
         s += (f"The gap shrank: its size fell from {abs(c.first):.3f} to {abs(c.last):.3f}, beyond the noise and "
               "the minimum effect.")
+        lp, _, ly, _ = _halves(last)
+        if lp * ly < 0:
+            s += (f" (After round {R} its two halves have opposite signs, position {lp:+.3f} and yaw {ly:+.3f}: the "
+                  f"size of the error they hide is {abs(lp) + abs(ly):.3f}, larger than the gap.)")
     elif cl["grew"]:
         s += (f"The gap grew: its size rose from {abs(c.first):.3f} to {abs(c.last):.3f}, beyond the noise and "
               "the minimum effect.")
@@ -1322,7 +1328,8 @@ def ensemble_sentence(single_m: dict, ens_m: dict, penalty: float | None = None,
     # smaller error figure (the disagreement is a mean over steps, the error a value at one step)
     if shared_bias(disagreement=max(dis_tr, dis_ev), error=min(err_tr, err_ev)):
         s += (f"The members are closer to each other than their mean is to reality (by a factor of at least "
-              f"{min(err_tr, err_ev) / max(dis_tr, dis_ev):.1f}, the smaller error over the larger disagreement). "
+              f"{math.floor(10 * min(err_tr, err_ev) / max(dis_tr, dis_ev)) / 10:.1f}, the smaller error over the "
+              "larger disagreement). "
               "The two figures come from two different rollouts of the same policy, from the same starts, so this "
               "is a comparison of scales, not of the same steps; it suggests that most of the error is one the "
               "members share, a bias of the data they all learned from, which a penalty on disagreement cannot "

@@ -695,7 +695,7 @@ def halves_sentence(gap_position: dict, gap_yaw: dict, drift_position: dict, dri
     rest = [h for h in hs if h not in yaw and h not in pos]
     rule = ("one-sample t-test on each seed's |yaw| minus |position|, and at least the minimum effect; the noise here is "
             "the spread across actor seeds on the same starts, so notebooks 04 and 06, which judge one run against the "
-            "spread across its starts, can find neither half clearly larger for the same model")
+            "spread across its starts, may judge the same model's halves differently")
     if len(yaw) == len(hs):
         s += f"At every horizon the yaw half is the larger ({rule}): most of the gap is about how the block is turned, not where it is. "
     elif len(pos) == len(hs):
@@ -854,8 +854,9 @@ def conclusion(gaps: dict, real: dict, terms: dict) -> str:
     rule = f"minimum effect that matters {MIN_REWARD_EFFECT:.3f} per step"
     if kr in ("up", "down"):
         s = (f"**Reality's pay changed with the horizon**: its reward per step {CHANGE_WORDS[kr]} by {r.diff:+.3f} "
-             f"from {lo} to {hi} steps ({r.why()}). Read the table before trusting it: a test at 95% comes out "
-             "this way by chance in about one sweep in 20. ")
+             f"from {lo} to {hi} steps ({r.why()}). Read the table before trusting it: at the 95% level, a sweep "
+             "in which reality's pay did not depend on the horizon would still pass this test about one time in "
+             "20. ")
     elif kr == "small":
         s = (f"**Reality pays about the same however far the actor dreamed**: its reward per step moved by "
              f"{r.diff:+.3f} from {lo} to {hi} steps, beyond the seed-to-seed noise but smaller than the {rule} "

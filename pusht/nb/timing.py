@@ -51,9 +51,10 @@ def estimate(notebook: str, path: Path = TIMES) -> str:
             "with nothing else running on it, and running the notebooks in order so that each reuses the models "
             "the earlier ones trained and cached. That is a quiet machine's figure. On a busy or shared one (a "
             "class server, a laptop compiling something, a free Colab runtime on shared hardware) it takes "
-            "longer, and can take several times as long: the training here is arithmetic on the CPU, every "
-            "other program that wants those cores takes its share of them, and the notebooks that train several "
-            "runs side by side (05, 06) lose most when the cores are already busy. More cores train seeds side "
+            "longer, and can take many times as long: the training here is arithmetic on the CPU, every other "
+            "program that wants those cores takes its share of them, and the notebooks that train several runs "
+            "side by side in worker processes (05, and 06 most of all) lose far more than their share when the "
+            "cores are already busy. More cores train seeds side "
             "by side and go faster; `SMOKE = True` runs in seconds. Your own reading and writing time comes on "
             "top.")
 
