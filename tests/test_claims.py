@@ -146,3 +146,19 @@ def test_numbers_named_as_different_quantities_are_not_one_quantity():
     gap = {**real, "claim": "06.change_up", "inputs": {"diff": 0.06, "se": 0.1, "k": 2.05, "min_effect": 0.02}}
     assert claims.conflicts([real, gap]) == []
     assert claims.conflicts([real, {**gap, "inputs": {**gap["inputs"], "quantity": "real rating"}}])
+
+
+def test_the_table_says_on_how_many_seeds_each_exercise_letter_was_decided(table):
+    decided: dict = {}
+    for r in table["records"]:
+        if r["claim"].endswith("_letter_decided"):
+            seeds = decided.setdefault(r["claim"], {})
+            seeds[r["seed"]] = seeds.get(r["seed"], True) and r["holds"]
+    assert set(decided) == {"04.ex1_letter_decided", "05.ex2_letter_decided", "06.ex3_letter_decided"}
+    md = (ROOT / "benchmarks" / "claims.md").read_text()
+    for name, ex in (("04.ex1_letter_decided", "Exercise 1 (04)"), ("05.ex2_letter_decided", "Exercise 2 (05)"),
+                     ("06.ex3_letter_decided", "Exercise 3 (06)")):
+        assert f"* {ex}: {sum(decided[name].values())} of {len(decided[name])} seeds" in md
+    # issue 38's target, nine seeds in ten, holds for Exercise 3; Exercises 1 and 2 reach eight (the closing
+    # note of issue 38 gives the starts and actor seeds their undecided seeds would need)
+    assert sum(decided["06.ex3_letter_decided"].values()) >= 9
