@@ -126,7 +126,7 @@ def in_order(text: str, *needles: str) -> None:
 def test_ex1_on_a_terminal_locks_runs_and_reconciles(out, env, tmp_path):
     t = Terminal(args("ex1", out), env, tmp_path)
     t.expect("What do you expect, over the 10 s evaluation?")
-    t.expect("(d) No real success, and the dream is no rosier than reality.")
+    t.expect("(d) No real success beyond chance, and the dream is no rosier than reality.")
     t.expect("Your prediction (a, b, c or d): ")
     t.send("b\n")
     t.expect("Why? One sentence (at least 6 words): ")
