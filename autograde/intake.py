@@ -46,7 +46,10 @@ It may carry a re-upload suffix, which also counts as "how many times re-uploade
 have the same time: ``02_reward (1)``, ``02_reward(2)``, ``02_reward-1``, ``02_reward_2``,
 ``02_reward_v2``, ``02_reward-Copy1`` (Jupyter's duplicate) all mean 02_reward. Colab's
 ``Copy of 02_reward`` is accepted as well. Anything else after the name (``02_reward_final``,
-``02_reward_solution``) is refused: it names no notebook of this assignment.
+``02_reward_solution``) names no notebook of this assignment: with the release at hand
+(``collect(release=...)``, as grading calls it) such a file of a known student is identified by
+its content (``identify``) and graded as what it holds, and so is a file whose name says one
+notebook and whose content is another; without it, the file is refused.
 
 Student ids (see :func:`normalise_student_id`): the id the LMS wrote is kept for the report
 (``Intake.display_names``) and turned into ONE folder-safe form that nbgrader uses as folder name

@@ -432,16 +432,20 @@ def test_lms_downloads_grade_end_to_end(executed_solutions, tmp_path):
             assert (course / "feedback" / s / ASSIGNMENT / "02_reward.html").is_file()
             assert report[s]["lms"] == got.lms[s]
         assert (course / "class_report.html").is_file()
-        with open(course / "canvas_import.csv", newline="", encoding="utf-8-sig") as f:
-            canvas_rows = list(csv.reader(f))
-        with open(course / "moodle_import.csv", newline="", encoding="utf-8-sig") as f:
-            moodle_rows = list(csv.reader(f))
+        served = {"canvas": "canvas_import.csv", "moodle": "moodle_import.csv"}
+        for other, file in served.items():        # the import file of this download's LMS, and no other
+            assert (course / file).is_file() == (other == system), (system, file)
+        if system in served:
+            with open(course / served[system], newline="", encoding="utf-8-sig") as f:
+                rows = list(csv.reader(f))
         if system == "canvas":
+            canvas_rows = rows
             assert any("marked this submission late" in n for n in report["canvas_1002"]["notes"])
             assert any("graded 'obrienseán_1003_40004_02_reward-1.ipynb'" in n for n in report["canvas_1003"]["notes"])
             # the LMS's own user ids went back out, one row each under the Points Possible row
             assert sorted(r[1] for r in canvas_rows[2:]) == ["1001", "1002", "1003"]
         elif system == "moodle":
+            moodle_rows = rows
             assert any("graded 'Seán OBrien_5301279_assignsubmission_file/02_reward (1).ipynb'" in n
                        for n in report["moodle_5301279"]["notes"])
             assert [r[0] for r in moodle_rows[1:]] == ["Participant 5301279"]
