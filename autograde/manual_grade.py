@@ -74,6 +74,8 @@ def apply_sheet(sheet: Path, course: Path = HERE, jobs: int | None = None, log=p
         raw = (row.get("score") or "").strip()
         if not raw:
             skipped.append(line)
+            if (row.get("comment") or "").strip():
+                log(f"line {line}: a comment without a score is not applied (give a score to apply it)")
             continue
         score = _number(raw)
         if score is None:

@@ -137,9 +137,17 @@ def _row(report, course, scheme, manual, student, notebook, grade_id, max_score,
         scheme_text = str(scheme.get(grade_id) or "")
     return {"student_name": _name(rep, student), "student_id": student, "notebook": notebook,
             "grade_id": grade_id, "status": status, "max_score": _num(max_score),
-            "current_score": entered.get("score") or (_num(score) if score is not None else ""),
+            "current_score": _shown(entered.get("score")) if entered else (_num(score) if score is not None else ""),
             "score": "", "comment": "", "answer": answer, "mark_scheme": scheme_text,
             "current_comment": entered.get("comment") or ""}
+
+
+def _shown(score) -> str:
+    """A score from manual_grades.csv as the sheet shows points ('1.0' -> '1'); as written if not a number."""
+    try:
+        return _num(float(score))
+    except (TypeError, ValueError):
+        return str(score or "")
 
 
 def read_answer(course: Path, student: str, notebook: str, grade_id: str) -> str:

@@ -310,3 +310,36 @@ def test_long_answers_are_cut_and_missing_notebooks_said(course):
     by = {(r["student_id"], r["notebook"]): r for r in rows}
     assert len(by[("canvas_101", "05_horizon")]["answer"]) < 3_200 and "cut at" in by[("canvas_101", "05_horizon")]["answer"]
     assert by[("s003", "04_imagination_gap")]["answer"] == "(no autograded notebook)"
+
+
+def test_a_tripwire_left_to_a_human_is_on_the_sheet_and_decided_from_it(course, feedback_calls):
+    """A test cell whose verdict the tripwire left undecided (autograde/tripwire.py) is a row too."""
+    report = class_of_three(course)
+    report["s003"]["undecided"] = [("04_imagination_gap", "dream_impl_tests", 3.0)]
+    report["s003"]["tripwires"] = ["04_imagination_gap dream_impl_tests: the grader could not run it again"]
+    path = write_to_grade(course, report)
+    _, rows = read_sheet_rows(path)
+    wire = [r for r in rows if r["grade_id"] == "dream_impl_tests"]
+    assert [(r["student_id"], r["status"], r["max_score"]) for r in wire] == [("s003", "NEEDS A HUMAN", "3")]
+    assert "could not run it again" in wire[0]["mark_scheme"]
+    with open(path, "w", newline="", encoding="utf-8-sig") as f:
+        w = csv.DictWriter(f, COLUMNS)
+        w.writeheader()
+        w.writerows({**r, "score": "3" if r is wire[0] else "", "comment": "noted" if r is rows[1] else ""}
+                    for r in rows)
+    lines = []
+    out = manual_grade.apply_sheet(path, course, jobs=1, log=lines.append)
+    assert [(e.student, e.grade_id, e.score) for e in out["applied"]] == [("s003", "dream_impl_tests", 3.0)]
+    assert cell_score_only(course, "s003", "04_imagination_gap", "dream_impl_tests") == 3.0
+    assert lines == ["line 3: a comment without a score is not applied (give a score to apply it)"]
+    # decided: the next sheet shows it graded, not waiting
+    del report["s003"]["undecided"]
+    _, rows = read_sheet_rows(write_to_grade(course, report))
+    assert [(r["status"], r["current_score"]) for r in rows if r["grade_id"] == "dream_impl_tests"] == [("graded", "3")]
+
+
+def cell_score_only(course, student, notebook, grade_id):
+    from nbgrader.api import Gradebook
+
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
+        return gb.find_grade(grade_id, notebook, ASSIGNMENT, student).manual_score
