@@ -50,6 +50,7 @@ def set_manual_grade(student: str, notebook: str, grade_id: str, score: float, c
     """Record one grade in manual_grades.csv and in the gradebook, and refresh that student's pages
     and grades.csv; raise ValueError (naming the nearest real ids) if it cannot be entered."""
     entry = Entry(student, notebook.removesuffix(".ipynb"), grade_id, score, comment)
+    _graded_course(Path(course))
     with course_lock(Path(course).resolve(), log=_stderr):
         problems = check(Path(course), [entry])
         if problems:
@@ -83,6 +84,7 @@ def apply_sheet(sheet: Path, course: Path = HERE, jobs: int | None = None, log=p
             score = math.nan
         entries.append(Entry(row["student_id"], row["notebook"].removesuffix(".ipynb"), row["grade_id"],
                              score, (row.get("comment") or "").strip(), line))
+    _graded_course(course)
     if jobs is None:
         from .schedule import default_jobs
         jobs = default_jobs()
@@ -95,6 +97,12 @@ def apply_sheet(sheet: Path, course: Path = HERE, jobs: int | None = None, log=p
         out = _apply(course, entries, jobs=jobs, log=log)
     out["skipped"] = skipped
     return out
+
+
+def _graded_course(course: Path) -> None:
+    """ValueError unless ``course`` has a gradebook (before its lock, which would make the folder)."""
+    if not (course / "gradebook.db").is_file():
+        raise ValueError(f"no gradebook in {course}: grade the class first (make grade), or give --course")
 
 
 def _number(text: str) -> float | None:
