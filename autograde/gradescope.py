@@ -120,8 +120,8 @@ VENDORED = ("pyproject.toml", "course.yaml", "pusht", "autograde")
 NOT_NEEDED = re.compile(r"^autograde/(classes/|manual_grade\.py$|dask_preload\.py$|mark_scheme\.yaml$)")
 NOT_VENDORED = re.compile(r"(^|/)(__pycache__|\.ipynb_checkpoints)(/|$)|\.pyc$|^autograde/(source|release|"
                           r"submitted|autograded|feedback|shared_stages)/|^autograde/(gradebook\.db|gradebook\."
-                          r"template\.db|grades\.csv|report\.csv|manual_grades\.csv|graded\.json|\.grading\.lock|"
-                          r"canvas_import\.csv|moodle_import\.csv|lms_export_notes\.txt|class_report\.html)$")
+                          r"template\.db|grades\.csv|report\.csv|manual_grades\.csv|to_grade\.csv|graded\.json|"
+                          r"\.grading\.lock|canvas_import\.csv|moodle_import\.csv|lms_export_notes\.txt|class_report\.html)$")
 # what grading imports (autograde/, pusht/, the notebooks' kernels), by their requirements.txt names
 GRADING_PACKAGES = ("torch", "pymunk", "numpy", "matplotlib", "tqdm", "pyyaml", "ipykernel", "nbgrader", "nh3")
 PYTHON = "3.11"                       # as CI runs it (nbgrader 0.9.6 needs 3.11 or newer)
