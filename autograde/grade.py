@@ -50,6 +50,7 @@ from .lms_export import spreadsheet_text, write_lms_exports
 from .prepare import prepare_student
 from .schedule import _split, default_jobs, run_tasks
 from .stages import SHARE_FROM, grader_fingerprint, shared_stages, submission_fingerprint
+from .to_grade import write_to_grade
 
 
 STATE_FILE = "graded.json"           # per student: what was graded (fingerprint) and its results
@@ -197,7 +198,8 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
         times = [r["seconds"] for r in results.get(s, {}).values() if isinstance(r, dict) and "seconds" in r]
         report[s]["seconds"] = round(sum(times), 2) if times else None
     export(course, report, got.rejected, held)
-    phases["grades.csv, report.csv"], t = time.perf_counter() - t, time.perf_counter()
+    write_to_grade(course, report)       # the answers a person grades, one row each (manual_grade --from-csv)
+    phases["grades.csv, report.csv, to_grade.csv"], t = time.perf_counter() - t, time.perf_counter()
     write_lms_exports(course, report, log=log)
     phases["LMS import files"], t = time.perf_counter() - t, time.perf_counter()
     try:
