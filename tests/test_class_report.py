@@ -226,6 +226,7 @@ def _students(plan, release, verdicts, looks, answer_note, rng, report, results,
             rep["notes"].append(answer_note)
         if s == RENAMER:
             rep["name"] = RENAMER_NAME
+            rep["tripwires"] = ["04_imagination_gap dream_impl_tests: the grader could not run dream again"]
             rep["human"] = [{"student": s, "file": "05_horizon_final.ipynb", "graded": "05_horizon.ipynb",
                              "why": "its name names no notebook of this assignment, but it holds 97% of 05_horizon.ipynb's cells"},
                             {"student": s, "file": "<scratch>.ipynb", "graded": None,
@@ -451,7 +452,8 @@ def test_hostile_strings_are_escaped_and_only_flagged_ids_appear(klass):
     assert not [k for _, a in p.tags for k in a if k.startswith("on")]
     assert p.tags[2] == ("meta", {"http-equiv": "Content-Security-Policy", "content": class_report.CSP})
     flags = {(a["data-kind"]) for a in with_attr(p, "data-kind") if "data-count" in a}
-    assert flags == {"answer key", "look-alike id", "not finished", "late", "file graded by content", "file not graded"}
+    assert flags == {"answer key", "look-alike id", "not finished", "late", "file graded by content", "file not graded",
+                     "grader could not run it"}          # was flagged, and shown under no heading, until issue 39
     flagged = {s for s in klass["report"] if s in (HOSTILE, "stu_005", RENAMER, *LOOKALIKE) or
                (klass["report"][s].get("lms") or {}).get("late")}
     for s in klass["report"]:
