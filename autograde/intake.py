@@ -641,6 +641,8 @@ def _identify(candidates: list[_Candidate], ids: dict[str, str], names: _Names, 
         if match is not None and match.notebook and match.notebook != c.by_name:
             c.notebook = match.notebook
             if c.by_name is None:
+                c.counter = _reupload(base)[1]     # "_final (2)" is newer than "_final" on a tie
+            if c.by_name is None:
                 why = f"its name names no notebook of this assignment, but {match.words()}"
             else:
                 why = f"its name says {c.by_name}, but {match.words()}"
@@ -717,7 +719,7 @@ def _pick_newest(candidates: list[_Candidate], ids: dict[str, str], intake: Inta
             if ignored:
                 line += "; ignored the older " + ", ".join(x.short() for x in ignored)
             notes.append(line)
-            if any(x.by_name != notebook for x in group):    # one of them is this notebook by content alone
+            if len({_stem(x) for x in group}) > 1:   # differently named files, one notebook by content
                 intake.human.append({"student": sid, "file": ", ".join(_base(x) for x in group), "graded": notebook,
                                      "why": f"{len(group)} files are {notebook} by their content; the newest, "
                                             f"{_base(c)}, was graded: check it is the one the student meant"})
@@ -726,6 +728,22 @@ def _pick_newest(candidates: list[_Candidate], ids: dict[str, str], intake: Inta
 
 def _base(c: _Candidate) -> str:
     return c.lms.original if c.lms else c.entry.parts[-1]
+
+
+_REUPLOAD = re.compile(rf"^(?:copy of\s*)*(?P<stem>.*?){_SUFFIX}(?:\.ipynb)?$", re.IGNORECASE)
+
+
+def _reupload(base: str) -> tuple[str, int]:
+    """(the name less an upload's re-upload marks, its counter): ``Copy of x (2).ipynb`` -> ("x", 2),
+    as ``_Names.parse`` reads a notebook's name, for any name."""
+    m = _REUPLOAD.match(base.strip())
+    return m["stem"].strip().casefold(), int(m["n1"] or m["n2"] or 0)
+
+
+def _stem(c: _Candidate) -> str:
+    """One name for a file and its re-uploads: the notebook its name names, else its own name less
+    the re-upload marks (``05_horizon_final-1.ipynb`` and ``05_horizon_final.ipynb`` are one)."""
+    return c.by_name or _reupload(_base(c))[0]
 
 
 _NEWEST = {"canvas": "the newest (Canvas numbers the files it keeps in the order they were uploaded)",
