@@ -121,7 +121,6 @@ View Grade Details > Grade Attempt > Attach File).
 from __future__ import annotations
 
 import argparse
-import io
 import json
 import os
 import shutil
@@ -158,14 +157,15 @@ MOODLE_DROPPED = "&<>\"`|':\\/"   # what Moodle's clean_param(PARAM_FILE) remove
 
 @dataclass
 class StudentReturn:
-    """One student's files: the summary first, then the notebook pages ({file name: bytes})."""
+    """One student's files: the summary first, then the notebook pages ({file name: its path}, read
+    only when a package is written, one at a time, so a large class is never all in memory)."""
     student: str
     lms: dict | None
     summary: bytes
-    pages: dict[str, bytes] = field(default_factory=dict)
+    pages: dict[str, Path] = field(default_factory=dict)
     withheld: int = 0                 # notes for the instructor left off the page
 
-    def files(self) -> list[tuple[str, bytes]]:
+    def files(self) -> list[tuple[str, bytes | Path]]:
         return [(SUMMARY, self.summary), *sorted(self.pages.items())]
 
 
@@ -332,17 +332,33 @@ def _read_page(path: Path) -> bytes | None:
     return data if len(data) <= MAX_PAGE_BYTES else None
 
 
-def _pages(course: Path, student: str) -> dict[str, bytes]:
+def _pages(course: Path, student: str) -> dict[str, Path]:
+    """The student's feedback pages that can be sent: regular files (no link), not too large."""
     if not _safe_id(student):
         return {}
     folder = course / "feedback" / student / ASSIGNMENT
     out = {}
     for name in NOTEBOOKS:
         page = f"{name[:-len('.ipynb')]}.html"
-        data = _read_page(folder / page)
-        if data is not None:
-            out[page] = data
+        try:
+            st = os.lstat(folder / page)
+        except OSError:
+            continue
+        if stat.S_ISREG(st.st_mode) and st.st_size <= MAX_PAGE_BYTES:
+            out[page] = folder / page
     return out
+
+
+UNREADABLE = (b"<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>page missing</title></head><body><p>"
+              b"This feedback page could not be read when the feedback was packaged: ask your instructor."
+              b"</p></body></html>\n")
+
+
+def _content(source: bytes | Path) -> bytes:
+    if isinstance(source, bytes):
+        return source
+    data = _read_page(source)
+    return UNREADABLE if data is None else data
 
 
 def _why_no_pages(rep: dict, standing) -> str:
@@ -451,16 +467,23 @@ ENTRIES = {"canvas": canvas_entries, "moodle": moodle_entries, "blackboard": bla
 KEYS = {"canvas": "user_id", "moodle": "participant_id", "blackboard": "username"}
 
 
-def _zip_bytes(entries: list[tuple[str, bytes]]) -> bytes:
-    buf = io.BytesIO()
+def _write_zip(path: Path, entries: list[tuple[str, bytes | Path]]) -> None:
+    """Replace ``path`` with a zip of ``entries``: written whole to a temporary file beside it, then
+    renamed (a reader never sees half a zip; a failure leaves the old one as it was)."""
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
     stamp = time.localtime()[:6]
-    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
-        for name, data in entries:
-            info = zipfile.ZipInfo(name, date_time=stamp)
-            info.compress_type = zipfile.ZIP_DEFLATED
-            info.external_attr = 0o644 << 16
-            z.writestr(info, data)
-    return buf.getvalue()
+    try:
+        with os.fdopen(fd, "wb") as f, zipfile.ZipFile(f, "w", zipfile.ZIP_DEFLATED) as z:
+            for name, source in entries:
+                info = zipfile.ZipInfo(name, date_time=stamp)
+                info.compress_type = zipfile.ZIP_DEFLATED
+                info.external_attr = 0o644 << 16
+                z.writestr(info, _content(source))
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
 
 
 def _write_folder(path: Path, entries: list[tuple[str, bytes]]) -> None:
@@ -468,7 +491,7 @@ def _write_folder(path: Path, entries: list[tuple[str, bytes]]) -> None:
     tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}."))
     try:
         for name, data in entries:
-            (tmp / name).write_bytes(data)
+            (tmp / name).write_bytes(_content(data))
         os.chmod(tmp, 0o755)
         old = None
         if path.exists() or path.is_symlink():
@@ -530,7 +553,7 @@ def write_feedback_return(course: Path, report: dict, log=print) -> list[Path]:
         path = out_dir / name
         if system in packages:
             entries = [e for _, es in packages[system] for e in es]
-            _write_atomic(path, _zip_bytes(entries))
+            _write_zip(path, entries)
             written.append(path)
             if system == "blackboard":
                 _write_folder(out_dir / BLACKBOARD_DIR, entries)
@@ -540,7 +563,7 @@ def write_feedback_return(course: Path, report: dict, log=print) -> list[Path]:
             if system == "blackboard" and (out_dir / BLACKBOARD_DIR).is_dir():
                 shutil.rmtree(out_dir / BLACKBOARD_DIR, ignore_errors=True)
     if generic:
-        _write_atomic(out_dir / GENERIC_ZIP, _zip_bytes([e for _, es in generic for e in es]))
+        _write_zip(out_dir / GENERIC_ZIP, [e for _, es in generic for e in es])
         written.append(out_dir / GENERIC_ZIP)
     else:
         (out_dir / GENERIC_ZIP).unlink(missing_ok=True)

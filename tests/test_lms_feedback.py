@@ -315,11 +315,37 @@ def test_a_failed_write_leaves_the_old_zip_whole(course, monkeypatch):
     write_feedback_return(course, report, log=lambda _: None)
     old = (course / RETURN_DIR / CANVAS_ZIP).read_bytes()
 
-    def broken(entries):
+    def broken(source):
         raise OSError("disk full")
-    monkeypatch.setattr(lms_feedback, "_zip_bytes", broken)
+    monkeypatch.setattr(lms_feedback, "_content", broken)          # fails halfway through the zip
     with pytest.raises(OSError):
         write_feedback_return(course, report, log=lambda _: None)
     assert (course / RETURN_DIR / CANVAS_ZIP).read_bytes() == old
     assert zipfile.ZipFile(io.BytesIO(old)).testzip() is None
     assert not [p for p in (course / RETURN_DIR).iterdir() if p.name.startswith(".")]
+
+
+def test_a_notebook_page_carries_its_own_canvas_file_id_where_intake_kept_it(course):
+    lms = canvas_id(7, "Ann")
+    lms["ids"]["attachment_ids"] = {"02_reward.ipynb": "5551", "04_imagination_gap.ipynb": "5552"}
+    report = grade(course, {"ann": (lms, "blank")})
+    pages_for(course, ["ann"])
+    write_feedback_return(course, report, log=lambda _: None)
+    got = {name.split("_", 3)[3]: canvas_infer(name) for name in members(course / RETURN_DIR / CANVAS_ZIP)}
+    assert got == {"summary.html": ("7", "97"), "02_reward.html": ("7", "5551"),
+                   "04_imagination_gap.html": ("7", "5552")}
+
+
+def test_a_linked_or_huge_page_is_not_sent(course, tmp_path, monkeypatch):
+    report = grade(course, {"s1": (None, "blank")})
+    folder = course / "feedback" / "s1" / ASSIGNMENT
+    folder.mkdir(parents=True)
+    secret = tmp_path / "secret.html"
+    secret.write_text("instructor's file")
+    (folder / "02_reward.html").symlink_to(secret)                      # a link is never followed
+    (folder / "04_imagination_gap.html").write_bytes(b"x" * 100)
+    monkeypatch.setattr(lms_feedback, "MAX_PAGE_BYTES", 50)             # nor a page over the cap
+    write_feedback_return(course, report, log=lambda _: None)
+    names = members(course / RETURN_DIR / GENERIC_ZIP)
+    assert list(names) == ["s1/summary.html"]
+    assert "instructor's file" not in names["s1/summary.html"].decode()
