@@ -30,6 +30,7 @@ from autograde.class_report import CSP
 from autograde.course import ASSIGNMENT, tool_env
 from autograde.lms_feedback import (BLACKBOARD_DIR, BLACKBOARD_ZIP, CANVAS_ZIP, GENERIC_ZIP, MOODLE_ZIP, README,
                                     RETURN_DIR, write_feedback_return)
+from browser_support import chromium
 from test_lms_export import canvas_id, grade, make_template, moodle_id
 
 HOSTILE = '<script>alert("x")</script><img src=x onerror=alert(1)>'
@@ -349,3 +350,49 @@ def test_a_linked_or_huge_page_is_not_sent(course, tmp_path, monkeypatch):
     names = members(course / RETURN_DIR / GENERIC_ZIP)
     assert list(names) == ["s1/summary.html"]
     assert "instructor's file" not in names["s1/summary.html"].decode()
+
+
+@pytest.mark.lane
+def test_the_summary_opens_on_a_phone_in_light_and_dark_mode(course, tmp_path):
+    """Headless Chromium at a phone's width: nothing runs, nothing is fetched, nothing overflows
+    sideways, the hostile note and name are text, and dark mode is dark."""
+    long_name = "Zoë " + "Ångström-" * 30 + HOSTILE
+    report = grade(course, {"zoe": (moodle_id("48212", long_name), "answered")})
+    report["zoe"]["notes"].append(HOSTILE + " " + "x" * 400)
+    pages_for(course, ["zoe"])
+    write_feedback_return(course, report, log=lambda _: None)
+    data = next(d for n, d in members(course / RETURN_DIR / MOODLE_ZIP).items() if n.endswith("_summary.html"))
+    page_file = tmp_path / "summary.html"
+    page_file.write_bytes(data)
+    results = {}
+    with chromium() as browser:
+        for scheme in ("light", "dark"):
+            page = browser.new_page(viewport={"width": 360, "height": 640}, color_scheme=scheme)
+            seen = {"console": [], "errors": [], "requests": [], "dialogs": []}
+            page.on("console", lambda m, seen=seen: seen["console"].append(f"{m.type}: {m.text}"))
+            page.on("pageerror", lambda e, seen=seen: seen["errors"].append(str(e)))
+            page.on("request", lambda r, seen=seen: seen["requests"].append(r.url))
+            page.on("dialog", lambda d, seen=seen: (seen["dialogs"].append(d.message), d.dismiss()))
+            page.goto(page_file.as_uri())
+            page.wait_for_load_state("load")
+            results[scheme] = {
+                **seen,
+                "overflow": page.evaluate("document.documentElement.scrollWidth - window.innerWidth"),
+                "scripts": page.evaluate("document.scripts.length + document.images.length"),
+                "text": page.evaluate("document.body.innerText"),
+                "colors": page.evaluate("[getComputedStyle(document.body).color, "
+                                        "getComputedStyle(document.body).backgroundColor]"),
+            }
+            page.close()
+    for scheme, r in results.items():
+        assert not r["errors"] and not r["dialogs"] and not [m for m in r["console"] if m.startswith("error")], r
+        assert r["requests"] == [page_file.as_uri()], r["requests"]
+        assert r["overflow"] <= 0, (scheme, r["overflow"])             # no sideways scrolling on a phone
+        assert r["scripts"] == 0 and HOSTILE in r["text"] and "Zoë Ångström-" in r["text"]
+
+    def luminance(css):
+        return sum(int(v) for v in re.findall(r"\d+", css)[:3]) / 3
+
+    light_fg, light_bg = map(luminance, results["light"]["colors"])
+    dark_fg, dark_bg = map(luminance, results["dark"]["colors"])
+    assert light_bg > 200 and light_fg < 60 and dark_bg < 60 and dark_fg > 200
