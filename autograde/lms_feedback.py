@@ -136,7 +136,7 @@ from pathlib import Path
 from .class_report import CSP, _t, gradebook_rows, hint_of
 from .course import ASSIGNMENT, HERE, NOTEBOOKS
 from .gradebook import read_manual
-from .lms_export import _ident, _lms, _num, _write_atomic, read_standings
+from .lms_export import _ident, _lms, _num, _write_atomic, lms_settings, read_standings
 from .lms_layouts import _MOODLE_FLAT, TITLE, _canvas_splits, _word
 
 RETURN_DIR = "feedback_return"
@@ -215,6 +215,10 @@ def _summary(student: str, rep: dict, standing, total, cells: list, manual: dict
         out.append('<p class="total">No score yet: the course has no gradebook entry for you.</p>')
     else:
         out.append(f'<p class="total">Total: {_num(standing.points)} of {_num(total)} points</p>')
+        lms_max = lms_settings()[0]["points_possible"]
+        if lms_max and total and lms_max != total:
+            out.append(f"<p>In the LMS, where the assignment is out of {_num(lms_max)}: "
+                       f"{_num(standing.points * lms_max / total)} of {_num(lms_max)}.</p>")
         if pending:
             out.append(f"<p>{_num(standing.pending_points)} point{'s' * (standing.pending_points != 1)} "
                        f"of answers graded by hand {'are' if len(pending) > 1 else 'is'} not graded yet and not "
@@ -271,18 +275,14 @@ def _summary(student: str, rep: dict, standing, total, cells: list, manual: dict
         "<p>None: no hidden test or completion point of yours was graded (the notes say why).</p>"))
 
     # hand-graded comments
-    maxima = {(nb, cell): mx for nb, cell, mx, _ in cells}
-    mine = sorted((k, r) for k, r in manual.items() if k[0] == student)
+    # (the score the gradebook holds: a manual grade outside the cell's range was refused there)
+    held = {(nb, cell): (mx, score) for nb, cell, mx, score in cells}
+    mine = sorted((k, r) for k, r in manual.items() if k[0] == student and (k[1], k[2]) in held)
     if mine:
         items = []
         for (_, nb, g), r in mine:
-            mx = maxima.get((nb, g))
-            score = (r.get("score") or "").strip()
-            try:
-                score = _num(float(score))
-            except ValueError:
-                pass
-            pts = f"{_t(score)}{' of ' + _num(mx) if mx is not None else ''} point(s)" if score else "no score"
+            mx, score = held[(nb, g)]
+            pts = "not graded yet" if score is None or (nb, g) in waiting else f"{_num(score)} of {_num(mx)} points"
             comment = (r.get("comment") or "").strip()
             items.append(f"<li><strong>{_t(nb)} {_t(g)}</strong>: {pts}"
                          + (f'<div class="comment">{_t(comment, 4000)}</div>' if comment else "") + "</li>")
@@ -518,6 +518,9 @@ def write_feedback_return(course: Path, report: dict, log=print) -> list[Path]:
     an earlier run is removed."""
     course = Path(course)
     out_dir = course / RETURN_DIR
+    if not report:
+        log(f"no student to return feedback to: {out_dir} is left as it was")
+        return []
     out_dir.mkdir(exist_ok=True)
     students = gather(course, report)
     packages: dict[str, list] = {}            # system -> [(student, entries)]

@@ -396,3 +396,18 @@ def test_the_summary_opens_on_a_phone_in_light_and_dark_mode(course, tmp_path):
     light_fg, light_bg = map(luminance, results["light"]["colors"])
     dark_fg, dark_bg = map(luminance, results["dark"]["colors"])
     assert light_bg > 200 and light_fg < 60 and dark_bg < 60 and dark_fg > 200
+
+
+def test_no_student_changes_nothing_and_a_refused_manual_grade_is_not_shown(course, monkeypatch):
+    out = course / RETURN_DIR
+    out.mkdir()
+    (out / CANVAS_ZIP).write_bytes(b"earlier")
+    assert write_feedback_return(course, {}, log=lambda _: None) == []
+    assert [p.name for p in out.iterdir()] == [CANVAS_ZIP] and (out / CANVAS_ZIP).read_bytes() == b"earlier"
+
+    report = grade(course, {"ann": (canvas_id(1, "Ann"), "answered")}, manual={"ann": 7})   # outside 0..1
+    monkeypatch.setattr(lms_feedback, "lms_settings", lambda: ({"points_possible": 90.0}, []))
+    write_feedback_return(course, report, log=lambda _: None)
+    words = Page(members(out / CANVAS_ZIP)["ann_1_91_summary.html"]).words
+    assert "ex1_sentence: not graded yet" in words and "7 of" not in words and "Clear." in words
+    assert "Total: 8 of 9 points" in words and "out of 90: 80 of 90" in words
