@@ -244,6 +244,8 @@ def test_moodle_feedback_zip_reaches_each_participant(course):
     assert HOSTILE in Page(got["48212"]["summary.html"]).words
     # Moodle splits the full name on '_': Zoë's is written with a space, as Moodle's own download does
     assert "Zoë Ångström_48212_assignsubmission_file_summary.html" in members(out / MOODLE_ZIP)
+    with zipfile.ZipFile(out / MOODLE_ZIP) as z:                       # names marked UTF-8 (general purpose bit 11)
+        assert all(i.flag_bits & 0x800 for i in z.infolist() if not i.filename.isascii())
     assert "OBrien, Bob Bobby_48211_assignsubmission_file_summary.html" in members(out / MOODLE_ZIP)
     assert "Upload multiple feedback files in a zip" in (out / README).read_text()
 
