@@ -65,7 +65,8 @@ so a file is matched by the first two ``_``-separated parts that are all digits:
 id, then the id of a file (attachment) of that user's *current* submission, exactly the two
 numbers Canvas's *Download Submissions* writes (``lms_layouts``: ``<name>[_LATE]_<user id>_<file
 id>_<display name>``) and ``intake`` keeps (``ids.user_id``, ``ids.attachment_id``: the newest
-graded file). Any other file is ignored silently. The files of one user become ONE submission
+graded file). Any other file is ignored (``@ignored_files``, which the method returns beside
+the comments made). The files of one user become ONE submission
 comment, "See attached files", hidden while the assignment is muted. Each file is attached with
 ``FileInContext.attach(self, g[:filename], g[:display_name])`` where ``display_name`` is the
 *submitted* file's display name: Canvas shows every returned file under the name of the student's
@@ -597,8 +598,8 @@ def _readme(students, packages, generic, left) -> str:
                 "  Each file is named <name>_<user id>_<file id>_<page>: Canvas attaches a student's files to ONE comment",
                 "  'See attached files' on their submission (hidden while the assignment is muted). Canvas shows each",
                 "  file under the name of the student's own upload with that file id (e.g. 02_reward.ipynb); it is",
-                "  the HTML page: tell students to open it in a browser. Files Canvas cannot match are ignored and",
-                "  listed by Canvas after the upload: a student who submitted again since the download is one.", ""]
+                "  the HTML page: tell students to open it in a browser. Files Canvas cannot match are ignored: a",
+                "  student who submitted again since the download is one (download and grade again first).", ""]
     if "moodle" in packages:
         out += [f"== {MOODLE_ZIP}: {len(packages['moodle'])} students ==",
                 "  Moodle: Assignment settings > Feedback types > tick Feedback files; then View all submissions >",
