@@ -47,6 +47,7 @@ from .course import ASSIGNMENT, COURSE_ID, HERE, NOTEBOOKS, _one_run_per_course,
 from .feedback import generate_feedback, sanitize_feedback_sources
 from .gradebook import export, record
 from .lms_export import spreadsheet_text, write_lms_exports
+from .lms_feedback import write_feedback_return
 from .prepare import prepare_student
 from .schedule import _split, default_jobs, run_tasks
 from .stages import SHARE_FROM, grader_fingerprint, shared_stages, submission_fingerprint
@@ -206,7 +207,13 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
         write_class_report(course, report, submitted=prepared, guarantees=held)
     except Exception as e:  # noqa: BLE001 - the report must never cost the grades
         log(f"WARNING: no class report ({type(e).__name__}: {e})")
-    phases["class report"] = time.perf_counter() - t
+    phases["class report"], t = time.perf_counter() - t, time.perf_counter()
+    try:                                  # the feedback each LMS takes back (lms_feedback)
+        write_feedback_return(course, report, log=log)
+    except Exception as e:  # noqa: BLE001 - the packages must never cost the grades
+        log(f"WARNING: no feedback packages ({type(e).__name__}: {e}); python -m autograde.lms_feedback "
+            f"makes them again")
+    phases["feedback packages"] = time.perf_counter() - t
     log("after grading: " + ", ".join(f"{name} {sec:.1f} s" for name, sec in phases.items()))
     return report
 

@@ -156,7 +156,9 @@ class Intake:
              "late": True | False (Canvas's LATE marker) | None (Moodle, Blackboard: not in the names),
              "submitted_at": ISO 8601 local time without zone (Blackboard) | None,
              "attempt": the graded attempt's number among this student's attempts in the
-                        download, oldest first (Blackboard) | None}
+                        download, oldest first (Blackboard) | None,
+             "attachment_ids": {"02_reward.ipynb": "678", ...}: the file id of each graded
+                        notebook's upload (Canvas) | None}
 
     ``human``: with the release to identify notebooks by (``collect(release=...)``), one entry per
         file whose name did not decide what it is, for the class report's "needs a human": a
@@ -854,6 +856,9 @@ def _collect_lms(usable: list[_Entry], system: str, wrapped: bool, names: _Names
     for who, sid in ids.items():
         graded = [c.lms for (s, _), c in chosen.items() if s == sid]
         record, notes = lms_layouts.summarise(system, files_of[who], graded)
+        # Canvas: each graded notebook's own upload, for returning its page under its name (lms_feedback)
+        record["attachment_ids"] = {nb: c.lms.file_id for (s, nb), c in sorted(chosen.items())
+                                    if s == sid and c.lms.file_id} if system == "canvas" else None
         intake.lms[sid] = record
         intake.notes.setdefault(sid, [])[:0] = notes
     return _finish(intake, ids, pending_notes)

@@ -75,10 +75,10 @@ upload whose id it carries (confirmed by https://github.com/instructure/canvas-l
 per student, ``<name>_<user id>_<attachment id>_summary.html`` and
 ``<name>_<user id>_<attachment id>_<notebook>.html``: ``<name>`` is Canvas's own (lowercased
 word characters as its download wrote it) with every ``_`` and non-word character removed, and
-``student`` when nothing is left or when it is all digits (it would be read as the user id); where
-``ids`` also carries ``attachment_ids`` ({notebook file name: that upload's file id}; intake keeps
-only the newest today) a notebook's page carries its own notebook's id, so it shows under that
-notebook's name. Inferred, not verified on a live Canvas: that a ``.html`` shown under an
+``student`` when nothing is left or when it is all digits (it would be read as the user id); the
+record's ``attachment_ids`` ({notebook file name: that upload's file id}, kept by intake) gives
+each notebook's page its own notebook's upload id, so it shows under that notebook's name (the
+summary goes with the newest upload, ``ids.attachment_id``). Inferred, not verified on a live Canvas: that a ``.html`` shown under an
 ``.ipynb`` display name opens as a page (``Attachment.mimetype`` is given the extracted file's
 own name, ``.html``); README.txt tells the instructor that students see their upload's name.
 An anonymous assignment's id (``anon_<id>``) is no user id: those students go to
@@ -134,7 +134,7 @@ import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .class_report import CSP, _t, gradebook_rows, hint_of
+from .class_report import CSP, _t, display_name, gradebook_rows, hint_of
 from .course import ASSIGNMENT, HERE, NOTEBOOKS
 from .gradebook import read_manual
 from .lms_export import _ident, _lms, _num, _write_atomic, lms_settings, read_standings
@@ -189,8 +189,8 @@ li { margin: .25em 0; } .comment { white-space: pre-wrap; }
 """
 
 
-def _who(student: str, lms: dict | None) -> str:
-    name = (lms or {}).get("name")
+def _who(student: str, lms: dict | None, name: str | None = None) -> str:
+    name = name or (lms or {}).get("name")
     ident = ""
     if lms:
         ids = lms.get("ids") or {}
@@ -208,7 +208,7 @@ def _summary(student: str, rep: dict, standing, total, cells: list, manual: dict
     notes = [n if isinstance(n, str) else str(n) for n in (rep.get("notes") or ())]
     withheld = sum(INSTRUCTOR_ONLY in n for n in notes)
     notes = [n for n in notes if INSTRUCTOR_ONLY not in n]
-    out = [f"<h1>Feedback: {_t(ASSIGNMENT)}</h1>", f"<p>{_who(student, lms)}</p>"]
+    out = [f"<h1>Feedback: {_t(ASSIGNMENT)}</h1>", f"<p>{_who(student, lms, display_name(rep))}</p>"]
 
     # total
     pending = standing.pending if standing else []
@@ -411,7 +411,8 @@ def canvas_entries(r: StudentReturn) -> list[tuple[str, bytes]] | str:
         return ("anonymous grading: Canvas's download names the student by an anonymous id, which Re-Upload "
                 "Submissions cannot match" if uid and uid.startswith("anon_") else
                 f"no Canvas user id usable by Re-Upload Submissions ({uid!r})")
-    per_nb = ids.get("attachment_ids") if isinstance(ids.get("attachment_ids"), dict) else {}
+    kept = (r.lms or {}).get("attachment_ids")
+    per_nb = kept if isinstance(kept, dict) else {}
     if aid is None or not _digits(aid):
         aid = next((v for v in map(_ident, per_nb.values()) if v and _digits(v)), None)
     if aid is None:
@@ -507,7 +508,7 @@ def _write_folder(path: Path, entries: list[tuple[str, bytes]]) -> None:
 
 
 def _jsonable(report: dict) -> dict:
-    keep = ("notes", "completion", "verdicts", "failed", "lms", "undecided")
+    keep = ("notes", "completion", "verdicts", "failed", "lms", "undecided", "name", "human", "submitted_at")
     return {s: {k: (rep or {}).get(k) for k in keep if k in (rep or {})} for s, rep in report.items()}
 
 

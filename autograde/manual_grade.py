@@ -23,6 +23,7 @@ import argparse
 import csv
 import difflib
 import io
+import json
 import math
 import sys
 from dataclasses import dataclass
@@ -228,7 +229,29 @@ def _apply(course: Path, entries: list[Entry], jobs: int, log, unchanged_skip: b
     # the same pages, exporter and time limit as grading's (feedback.py); a page that cannot be made is said, not silent
     errors = generate_feedback(course, students, jobs=jobs, log=log)
     export_csv(course, course / "grades.csv")
+    refresh_returns(course, log=log)
     return {"applied": applied, "unchanged": unchanged, "students": students, "feedback_errors": errors}
+
+
+def refresh_returns(course: Path, log=print) -> list[Path]:
+    """The LMS import file and the feedback packages, made again from the report the last grading
+    saved (``lms_feedback``'s report.json), so that hand grades reach them without grading again.
+    A tripwire decision now in manual_grades.csv no longer waits. Nothing where no grading saved
+    a report (a course graded before this existed: ``make grade`` again does it)."""
+    from .gradebook import read_manual
+    from .lms_export import write_lms_exports
+    from .lms_feedback import REPORT_JSON, RETURN_DIR, write_feedback_return
+
+    saved = course / RETURN_DIR / REPORT_JSON
+    if not saved.is_file():
+        log(f"note: {saved} does not exist, so the import file and the feedback packages were not made again: "
+            f"run make grade again (nothing is regraded)")
+        return []
+    report = json.loads(saved.read_text(encoding="utf-8"))
+    decided = read_manual(course)
+    for s, rep in report.items():
+        rep["undecided"] = [u for u in rep.get("undecided") or () if (s, u[0], u[1]) not in decided]
+    return write_lms_exports(course, report, log=log) + write_feedback_return(course, report, log=log)
 
 
 def _stderr(line: str) -> None:

@@ -330,7 +330,7 @@ def test_a_failed_write_leaves_the_old_zip_whole(course, monkeypatch):
 
 def test_a_notebook_page_carries_its_own_canvas_file_id_where_intake_kept_it(course):
     lms = canvas_id(7, "Ann")
-    lms["ids"]["attachment_ids"] = {"02_reward.ipynb": "5551", "04_imagination_gap.ipynb": "5552"}
+    lms["attachment_ids"] = {"02_reward.ipynb": "5551", "04_imagination_gap.ipynb": "5552"}
     report = grade(course, {"ann": (lms, "blank")})
     pages_for(course, ["ann"])
     write_feedback_return(course, report, log=lambda _: None)

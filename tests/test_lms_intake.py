@@ -23,7 +23,7 @@ from autograde.classes import lms
 from autograde.intake import collect
 
 NOTEBOOKS = ["01_world_model.ipynb", "02_reward.ipynb", "03_imagination_actor.ipynb"]
-RECORD_KEYS = {"system", "name", "ids", "late", "submitted_at", "attempt"}
+RECORD_KEYS = {"system", "name", "ids", "late", "submitted_at", "attempt", "attachment_ids"}
 
 
 def notebook_bytes(tag: str) -> bytes:
@@ -70,7 +70,9 @@ def test_canvas_download_is_read_by_user_id_with_late_marker_and_resubmission(tm
     assert all(set(uploads) == set(NEW) for uploads in intake.students.values())
     assert intake.lms["canvas_1001"] == {"system": "canvas", "name": "leeann",
                                          "ids": {"user_id": "1001", "attachment_id": "40002"},
-                                         "late": False, "submitted_at": None, "attempt": None}
+                                         "late": False, "submitted_at": None, "attempt": None,
+                                         "attachment_ids": {"01_world_model.ipynb": "40001",
+                                                            "02_reward.ipynb": "40002"}}
     zoe = intake.lms["canvas_1002"]
     assert zoe["name"] == "müllerzoë" and zoe["late"] is True and zoe["ids"]["user_id"] == "1002"
     assert graded(intake, "canvas_1002").member.startswith("müllerzoë_LATE_1002_")
@@ -103,7 +105,8 @@ def test_canvas_names_of_the_older_format_anonymous_grading_text_entries_and_uui
     assert list(anon.students) == ["canvas_anon_Ab3dE", "canvas_anon_x1Y2z"] and anon.rejected == []
     assert anon.lms["canvas_anon_Ab3dE"] == {"system": "canvas", "name": None,
                                              "ids": {"user_id": "anon_Ab3dE", "attachment_id": "71"},
-                                             "late": True, "submitted_at": None, "attempt": None}
+                                             "late": True, "submitted_at": None, "attempt": None,
+                                             "attachment_ids": {"02_reward.ipynb": "71"}}
 
 
 @pytest.mark.parametrize("folders", [True, False])
@@ -113,7 +116,7 @@ def test_moodle_download_is_read_by_participant_id(tmp_path, folders):
     assert intake.rejected == [] and intake.warnings == []
     zoe = intake.lms["moodle_5301277"]
     assert zoe == {"system": "moodle", "name": "Zoë Müller", "ids": {"participant_id": "5301277"},
-                   "late": None, "submitted_at": None, "attempt": None}
+                   "late": None, "submitted_at": None, "attempt": None, "attachment_ids": None}
     assert graded(intake, "moodle_5301277").member.startswith("Zoë Müller_5301277_assignsubmission_file")
     assert intake.lms["moodle_5301279"]["name"] == "Seán OBrien"
     up = graded(intake, "moodle_5301279")
@@ -138,7 +141,7 @@ def test_blackboard_download_latest_attempt_wins_and_receipts_are_read(tmp_path)
     assert intake.rejected == [] and intake.warnings == []         # receipts are not "unrecognised"
     jdoe = intake.lms["blackboard_jdoe"]
     assert jdoe == {"system": "blackboard", "name": "Jane Doe", "ids": {"username": "jdoe"}, "late": None,
-                    "submitted_at": "2026-03-02T09:30:15", "attempt": 2}
+                    "submitted_at": "2026-03-02T09:30:15", "attempt": 2, "attachment_ids": None}
     assert all(graded(intake, "blackboard_jdoe", n).data == NEW[n] for n in NEW)
     summary = intake.notes["blackboard_jdoe"][0]
     assert "2 attempts in this download (2026-03-01 10:00:00, 2026-03-02 09:30:15)" in summary
