@@ -361,6 +361,11 @@ def test_the_summary_opens_on_a_phone_in_light_and_dark_mode(course, tmp_path):
     long_name = "Zoë " + "Ångström-" * 30 + HOSTILE
     report = grade(course, {"zoe": (moodle_id("48212", long_name), "answered")})
     report["zoe"]["notes"].append(HOSTILE + " " + "x" * 400)
+    report["zoe"]["human"] = [       # as intake finds them: a renamed notebook, graded; a stray file, not
+        {"student": "zoe", "file": "05_horizon_final.ipynb", "graded": "05_horizon.ipynb",
+         "why": "its name names no notebook of this assignment, but it holds 97% of 05_horizon.ipynb's cells"},
+        {"student": "zoe", "file": "scratch.ipynb", "graded": None,
+         "why": "it holds at most 3% of any notebook's cells (at least 30% are needed)"}]
     pages_for(course, ["zoe"])
     write_feedback_return(course, report, log=lambda _: None)
     data = next(d for n, d in members(course / RETURN_DIR / MOODLE_ZIP).items() if n.endswith("_summary.html"))
@@ -391,6 +396,9 @@ def test_the_summary_opens_on_a_phone_in_light_and_dark_mode(course, tmp_path):
         assert r["requests"] == [page_file.as_uri()], r["requests"]
         assert r["overflow"] <= 0, (scheme, r["overflow"])             # no sideways scrolling on a phone
         assert r["scripts"] == 0 and HOSTILE in r["text"] and "Zoë Ångström-" in r["text"]
+        # the renamed and the refused file, said as the student reads it, beside their name and ids
+        assert "05_horizon_final.ipynb: graded as 05_horizon.ipynb" in r["text"], r["text"]
+        assert "scratch.ipynb: not graded" in r["text"] and "zoe" in r["text"] and "48212" in r["text"]
 
     def luminance(css):
         return sum(int(v) for v in re.findall(r"\d+", css)[:3]) / 3
