@@ -148,9 +148,30 @@ def test_the_week_end_to_end(executed_solutions, tmp_path, system):
     assert COMMENT in summary
     if system in ("canvas", "moodle"):     # Blackboard: no import file (grades.csv)
         assert key in (course / f"{system}_import.csv").read_text(encoding="utf-8-sig")
+    # what each LMS's own names said, kept: Canvas's late marker, Blackboard's attempt time; and in
+    # grades.csv, each student's name and when they handed in, as the download says
+    rows = grades_rows(course)
+    for sid in ids.values():
+        assert rows[sid]["last_name"] == report[sid]["name"] and rows[sid]["timestamp"] == report[sid]["submitted_at"]
+    if system == "canvas":
+        assert any("marked this submission late" in n for n in report[ids["B"]]["notes"])
+        with open(course / "canvas_import.csv", newline="", encoding="utf-8-sig") as f:
+            assert sorted(r[1] for r in list(csv.reader(f))[2:]) == ["1001", "1002", "1003"]
+    elif system == "moodle":
+        with open(course / "moodle_import.csv", newline="", encoding="utf-8-sig") as f:
+            assert sorted(r[0] for r in list(csv.reader(f))[1:]) == [
+                f"Participant {sid.split('_', 1)[1]}" for sid in sorted(ids.values())]
+    else:       # jdoe's second attempt is graded, and its time is the hand-in's
+        assert report[ids["A"]]["lms"]["ids"] == {"username": "jdoe"}
+        assert report[ids["A"]]["lms"]["submitted_at"].startswith("2026-03-02T09:30")
+        assert rows[ids["A"]]["timestamp"] == "2026-03-02 09:30:15"
     print(f"{system}: graded 3 students (02 x 3, 04 x 1) in {seconds:.0f} s")
 
 
+def grades_rows(course) -> dict[str, dict]:
+    with open(course / "grades.csv", newline="", encoding="utf-8") as f:
+        return {r["student_id"]: r for r in csv.DictReader(io.StringIO(f.read()))}
+
+
 def grades_csv(course) -> dict[str, float]:
-    with open(course / "grades.csv", newline="") as f:
-        return {r["student_id"]: float(r["raw_score"] or 0) for r in csv.DictReader(io.StringIO(f.read()))}
+    return {s: float(r["raw_score"] or 0) for s, r in grades_rows(course).items()}
