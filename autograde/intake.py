@@ -431,6 +431,7 @@ class _Candidate:
     by_name: str | None = None     # the notebook its file name names (None: it names none)
     data: bytes | None = None      # read ahead to identify it by content (``_identify``)
     error: str = ""                # why it could not be read, when read ahead
+    renamed: str = ""              # why its content, not its name, decided its notebook (said if graded)
 
     def newness(self) -> tuple:
         """Larger is newer: the LMS's own order first (Canvas's file id, Blackboard's attempt
@@ -645,11 +646,9 @@ def _identify(candidates: list[_Candidate], ids: dict[str, str], names: _Names, 
             if c.by_name is None:
                 c.counter = _reupload(base)[1]     # "_final (2)" is newer than "_final" on a tie
             if c.by_name is None:
-                why = f"its name names no notebook of this assignment, but {match.words()}"
+                c.renamed = f"its name names no notebook of this assignment, but {match.words()}"
             else:
-                why = f"its name says {c.by_name}, but {match.words()}"
-            intake.notes.setdefault(sid, []).append(f"{base}: graded as {c.notebook}: {why}")
-            intake.human.append({"student": sid, "file": base, "graded": c.notebook, "why": why})
+                c.renamed = f"its name says {c.by_name}, but {match.words()}"
         elif c.by_name is None:
             if c.error:
                 why = f"it could not be read ({c.error})"
@@ -711,6 +710,9 @@ def _pick_newest(candidates: list[_Candidate], ids: dict[str, str], intake: Inta
             continue
         c, data = graded
         chosen[(sid, notebook)] = c
+        if c.renamed:                  # graded as what it holds (_identify): said to the student and to a human
+            intake.notes.setdefault(sid, []).append(f"{_base(c)}: graded as {notebook}: {c.renamed}")
+            intake.human.append({"student": sid, "file": _base(c), "graded": notebook, "why": c.renamed})
         intake.students.setdefault(sid, {})[notebook] = Upload(data, c.entry.member, c.entry.mtime)
         ignored = group[group.index(c) + 1:]     # older than the graded one
         if len(group) > 1:
