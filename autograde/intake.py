@@ -712,7 +712,8 @@ def _pick_newest(candidates: list[_Candidate], ids: dict[str, str], intake: Inta
         chosen[(sid, notebook)] = c
         if c.renamed:                  # graded as what it holds (_identify): said to the student and to a human
             intake.notes.setdefault(sid, []).append(f"{_base(c)}: graded as {notebook}: {c.renamed}")
-            intake.human.append({"student": sid, "file": _base(c), "graded": notebook, "why": c.renamed})
+            if len({_stem(x) for x in group}) == 1:      # else the entry for two files of one notebook says it
+                intake.human.append({"student": sid, "file": _base(c), "graded": notebook, "why": c.renamed})
         intake.students.setdefault(sid, {})[notebook] = Upload(data, c.entry.member, c.entry.mtime)
         ignored = group[group.index(c) + 1:]     # older than the graded one
         if len(group) > 1:
