@@ -23,10 +23,12 @@ first element of its ``<head>`` is a Content-Security-Policy that allows none) a
   predicted x measured table, no per-student list;
 * the completion points' receipts missing or out of order, by the grader's reason;
 * what needs a human, by student: answer-key copies, look-alike ids, graded functions the grader
-  could not follow, notebooks the grader could not finish, late LMS submissions;
+  could not follow or could not run, notebooks the grader could not finish, late LMS submissions,
+  uploaded files that their names did not place (graded by their content, or not graded at all:
+  ``report[s]["human"]``, from ``intake.Intake.human``);
 * how long each student's grading took (``report[s]["seconds"]``): a histogram, total and mean.
 
-Student ids appear only in the flags. Every string a student could have made (an id, an LMS name, a
+Student ids appear only in the flags, each with the name the LMS wrote beside it (:func:`display_name`). Every string a student could have made (an id, an LMS name, a
 note quoting their file or their output) is escaped, with invisible and direction-changing
 characters spelled as code points. No cell source is read into the page, and the gradebook's
 ``source_cell`` table (which holds the hidden tests) is never queried.
@@ -107,6 +109,12 @@ FLAG_KINDS = {                         # kind: what the instructor should do
     "delegation unclear": "the grader cannot tell whether a graded function reaches the package's own: read it",
     "not finished": "nbgrader could not finish a notebook: points from the tests that ran are kept",
     "late": "handed in after the deadline, says the LMS",
+    "grader could not run it": "a graded function ran in the student's kernel, but the grader could not run it: "
+                               "0 points for it until you decide",
+    "file not graded": "an uploaded file that neither its name nor its content places in the assignment: "
+                       "read it, and tell the student (their page says it was not graded)",
+    "file graded by content": "a file whose name did not say which notebook it is, graded as the notebook it "
+                              "holds: check it is the one the student meant",
 }
 
 
@@ -367,6 +375,11 @@ def gather(course: Path, report: dict, submitted: dict | None = None) -> dict:
             flags.append(("not finished", s, f"{name}: {_error_line(error)}"))
         for line in rep.get("tripwires") or ():      # the kernel ran it, the grader could not: 0 until decided
             flags.append(("grader could not run it", s, str(line)))
+        for h in rep.get("human") or ():           # intake: files their names did not place (identify.py)
+            if isinstance(h, dict):
+                kind = "file graded by content" if h.get("graded") else "file not graded"
+                flags.append((kind, s, f"{h.get('file')}: " + (f"graded as {h['graded']}: " if h.get("graded") else "")
+                               + str(h.get("why"))))
         lms = rep.get("lms")
         if isinstance(lms, dict) and lms.get("late"):
             who = " ".join(str(lms.get(k)) for k in ("name",) if lms.get(k))
@@ -377,7 +390,8 @@ def gather(course: Path, report: dict, submitted: dict | None = None) -> dict:
     seconds = [_num((report.get(s) or {}).get("seconds")) for s in students]
     timed = [x for x in seconds if x is not None and x >= 0]
     return {"students": len(students), "max": maximum, "scores": scores, "cells": cell_list,
-            "exercises": exercises, "flags": flags, "seconds": timed, "untimed": len(students) - len(timed),
+            "exercises": exercises, "flags": flags, "names": {s: display_name(report.get(s)) for s in students},
+            "seconds": timed, "untimed": len(students) - len(timed),
             "notebook_source": "given" if submitted is not None else (
                 "course/submitted" if (course / "submitted").is_dir() else "none")}
 
@@ -440,6 +454,22 @@ def _id(student: str) -> str:
         return shown
     spelled = "".join(ch if " " < ch < "\x7f" else f"[U+{ord(ch):04X}]" for ch in student[:128])
     return f'{shown} <span class="spelled">({_t(spelled, 1200)})</span>'
+
+
+def display_name(rep) -> str | None:
+    """The student's name as the LMS (or the download) wrote it: ``report[s]["name"]``, else the LMS
+    record's name; None where neither says one. Shown beside the id, never used as a key."""
+    rep = rep if isinstance(rep, dict) else {}
+    lms = rep.get("lms") if isinstance(rep.get("lms"), dict) else {}
+    for name in (rep.get("name"), lms.get("name")):
+        if isinstance(name, str) and name.strip():
+            return name.strip()
+    return None
+
+
+def _who(student: str, name: str | None) -> str:
+    """The id, and the name beside it where there is one (both escaped)."""
+    return _id(student) + (f' <span class="name">{_t(name, 128)}</span>' if name and name != student else "")
 
 
 def _n(n: int, word: str) -> str:
@@ -631,13 +661,14 @@ def _flags_section(d: dict) -> str:
         items = by_kind.get(kind, [])
         if not items:
             continue
-        rows = "".join(f'<tr class="flag" data-kind="{kind}"><td>{_id(s)}</td><td>{_t(text, 800)}</td></tr>'
+        names = d.get("names") or {}
+        rows = "".join(f'<tr class="flag" data-kind="{kind}"><td>{_who(s, names.get(s))}</td><td>{_t(text, 800)}</td></tr>'
                        for s, text in items)
         students = len({s for s, _ in items})
         out.append(f'<details{" open" if len(items) <= 25 else ""} data-kind="{kind}" data-count="{len(items)}">'
                    f'<summary><strong>{kind}</strong>: {_n(len(items), "flag")}, {_n(students, "student")}. '
                    f'{what}</summary>'
-                   f'<table class="flags"><tr><th>student id</th><th>what</th></tr>{rows}</table></details>')
+                   f'<table class="flags"><tr><th>student</th><th>what</th></tr>{rows}</table></details>')
     return ('<section id="flags"><h2>Needs a human</h2><p>Ids are shown as the LMS wrote them; any character '
             'outside printable ASCII is also spelled as a code point.</p>' + "".join(out) + "</section>")
 

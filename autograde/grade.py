@@ -46,10 +46,12 @@ from .class_report import write_class_report
 from .course import ASSIGNMENT, COURSE_ID, HERE, NOTEBOOKS, _one_run_per_course, course_bundle, prepare_course
 from .feedback import generate_feedback, sanitize_feedback_sources
 from .gradebook import export, record
-from .lms_export import write_lms_exports
+from .lms_export import spreadsheet_text, write_lms_exports
+from .lms_feedback import write_feedback_return
 from .prepare import prepare_student
 from .schedule import _split, default_jobs, run_tasks
 from .stages import SHARE_FROM, grader_fingerprint, shared_stages, submission_fingerprint
+from .to_grade import write_to_grade
 
 
 STATE_FILE = "graded.json"           # per student: what was graded (fingerprint) and its results
@@ -80,6 +82,7 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
     from tqdm.auto import tqdm
 
     course = course.resolve()
+    _refuse_empty(submissions)           # before anything in the course folder is touched
     limits = {**sandbox.DEFAULT_LIMITS, **(limits or {})}
     ok, why = sandbox.available()
     if confine is None:
@@ -96,15 +99,18 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
         log(line)
     prepare_course(course)
     shutil.copy(course / "gradebook.db", course / "gradebook.template.db")
-    got = intake.collect(submissions, NOTEBOOKS)
+    release = {name: nbformat.read(course / "release" / ASSIGNMENT / name, as_version=4) for name in NOTEBOOKS}
+    got = intake.collect(submissions, NOTEBOOKS, release=release)     # each file known by its content
     for line in got.rejected:
         log(f"skipped {line}")
     for line in got.warnings:            # e.g. look-alike ids not checked: PyICU is missing
         log(f"WARNING: {line}")
         warnings.warn(line)
-    release = {name: nbformat.read(course / "release" / ASSIGNMENT / name, as_version=4) for name in NOTEBOOKS}
     report = {s: {"notes": list(got.notes.get(s, [])), "completion": {}, "verdicts": {}, "failed": {},
-                  "lms": got.lms.get(s)}          # the LMS's own identity, for its import file
+                  "lms": got.lms.get(s),          # the LMS's own identity, for its import file
+                  "name": student_name(got, s),   # shown beside the id, never a key
+                  "human": [h for h in got.human if h["student"] == s],   # files their names did not place
+                  "submitted_at": submitted_at(got, s)}                  # for grades.csv's timestamp
               for s in got.students}
     prepared = {}
     for s, uploads in got.students.items():
@@ -166,14 +172,16 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
                 (dest / name).write_text(text, encoding="utf-8")
             left[s] -= 1
             if not left[s]:                  # the bar counts students: all their tasks done
-                bar.set_postfix_str(s[:20])
+                name = report[s].get("name")
+                bar.set_postfix_str(spreadsheet_text(f"{name} ({s})" if name else s)[:40])
                 bar.update()
         run_tasks(tasks, jobs, scheduler, submit_args, on_done, log)
     state = {s: {"fingerprint": prints[s], "results": results[s]} for s in students if s in results}
     state_path.write_text(json.dumps(state, indent=1, sort_keys=True))
     with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
-        for s in report:
-            gb.update_or_create_student(s)
+        for s in report:                 # grades.csv's last_name: the whole name as the LMS wrote it
+            name = report[s].get("name")
+            gb.update_or_create_student(s, last_name=spreadsheet_text(name) if name else None)
             try:
                 gb.remove_submission(ASSIGNMENT, s)
             except Exception:
@@ -191,16 +199,61 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
         times = [r["seconds"] for r in results.get(s, {}).values() if isinstance(r, dict) and "seconds" in r]
         report[s]["seconds"] = round(sum(times), 2) if times else None
     export(course, report, got.rejected, held)
-    phases["grades.csv, report.csv"], t = time.perf_counter() - t, time.perf_counter()
+    write_to_grade(course, report)       # the answers a person grades, one row each (manual_grade --from-csv)
+    phases["grades.csv, report.csv, to_grade.csv"], t = time.perf_counter() - t, time.perf_counter()
     write_lms_exports(course, report, log=log)
     phases["LMS import files"], t = time.perf_counter() - t, time.perf_counter()
     try:
         write_class_report(course, report, submitted=prepared, guarantees=held)
     except Exception as e:  # noqa: BLE001 - the report must never cost the grades
         log(f"WARNING: no class report ({type(e).__name__}: {e})")
-    phases["class report"] = time.perf_counter() - t
+    phases["class report"], t = time.perf_counter() - t, time.perf_counter()
+    try:                                  # the feedback each LMS takes back (lms_feedback)
+        write_feedback_return(course, report, log=log)
+    except Exception as e:  # noqa: BLE001 - the packages must never cost the grades
+        log(f"WARNING: no feedback packages ({type(e).__name__}: {e}); python -m autograde.lms_feedback "
+            f"makes them again")
+    phases["feedback packages"] = time.perf_counter() - t
     log("after grading: " + ", ".join(f"{name} {sec:.1f} s" for name, sec in phases.items()))
     return report
+
+
+def _refuse_empty(submissions: Path) -> None:
+    """A download that names no student (an empty folder, the wrong zip, a zip of only system
+    files) is refused with ``intake.LayoutError`` before any output of an earlier grading is
+    rewritten: grading it would overwrite grades.csv, the import files and the class report with
+    a class of nobody."""
+    got = intake.collect(submissions, NOTEBOOKS)
+    if got.students:
+        return
+    seen = "; ".join(got.rejected[:5]) + (f"; and {len(got.rejected) - 5} more" if len(got.rejected) > 5 else "")
+    raise intake.LayoutError(
+        f"{submissions} holds no student's submission, so nothing was graded and no file was changed"
+        + (f" (what it holds: {seen})" if seen else " (it is empty)")
+        + ". Expected the LMS's download of the assignment, or <student>_<notebook>.ipynb or "
+          "<student>/<notebook>.ipynb files")
+
+
+def submitted_at(got: intake.Intake, student: str) -> str | None:
+    """When the student handed in, as the download says: the LMS's own time where its names carry
+    one (Blackboard's attempt), else the newest graded file's time in the download (a zip entry's
+    date, or the file's modification time), local time without a zone; None with no file."""
+    lms = got.lms.get(student) or {}
+    if lms.get("submitted_at"):
+        return str(lms["submitted_at"]).replace("T", " ")
+    times = [u.mtime for u in (got.students.get(student) or {}).values()]
+    return f"{max(times):%Y-%m-%d %H:%M:%S}" if times else None
+
+
+def student_name(got: intake.Intake, student: str) -> str | None:
+    """The student's name as the download wrote it: the LMS's (Moodle's full name, Blackboard's
+    receipt name, Canvas's file-name form of it), else the id as written where it differs from the
+    folder-safe one (``Ann Lee`` for ``Ann_Lee``); None where there is none."""
+    lms = got.lms.get(student) or {}
+    if lms.get("name"):
+        return str(lms["name"])
+    written = got.display_names.get(student)
+    return written if written and written != student else None
 
 
 def main(argv=None) -> int:

@@ -41,7 +41,10 @@ def record(course: Path, report: dict, results: dict) -> None:
                 # SQLAlchemy 2 reports once per process ("Object of type <SubmittedAssignment> not in
                 # session"); the rows are added right after, so it is noise on the instructor's screen
                 warnings.filterwarnings("ignore", message=r"Object of type <\w+> not in session")
-                gb.add_submission(ASSIGNMENT, student, timestamp="2026-01-01 00:00:00.000000 UTC")
+                # when the student handed in, as the download says (grade.submitted_at); nbgrader's own
+                # default, the grading time, where it says nothing
+                when = rep.get("submitted_at")
+                gb.add_submission(ASSIGNMENT, student, **({"timestamp": when} if when else {}))
             for name, entry in res.items():
                 nb_id = name[:-len(".ipynb")]
                 if entry.get("note"):

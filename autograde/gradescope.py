@@ -120,8 +120,8 @@ VENDORED = ("pyproject.toml", "course.yaml", "pusht", "autograde")
 NOT_NEEDED = re.compile(r"^autograde/(classes/|manual_grade\.py$|dask_preload\.py$|mark_scheme\.yaml$)")
 NOT_VENDORED = re.compile(r"(^|/)(__pycache__|\.ipynb_checkpoints)(/|$)|\.pyc$|^autograde/(source|release|"
                           r"submitted|autograded|feedback|shared_stages)/|^autograde/(gradebook\.db|gradebook\."
-                          r"template\.db|grades\.csv|report\.csv|manual_grades\.csv|graded\.json|\.grading\.lock|"
-                          r"canvas_import\.csv|moodle_import\.csv|lms_export_notes\.txt|class_report\.html)$")
+                          r"template\.db|grades\.csv|report\.csv|manual_grades\.csv|to_grade\.csv|graded\.json|"
+                          r"\.grading\.lock|canvas_import\.csv|moodle_import\.csv|lms_export_notes\.txt|class_report\.html)$")
 # what grading imports (autograde/, pusht/, the notebooks' kernels), by their requirements.txt names
 GRADING_PACKAGES = ("torch", "pymunk", "numpy", "matplotlib", "tqdm", "pyyaml", "ipykernel", "nbgrader", "nh3")
 PYTHON = "3.11"                       # as CI runs it (nbgrader 0.9.6 needs 3.11 or newer)
@@ -628,11 +628,17 @@ def stage(submission: Path, dest: Path) -> tuple[list[str], list[str]]:
     at most ``MAX_FILES`` entries ``MAX_DEPTH`` folders deep are looked at, and a file is copied
     up to one byte past the size ``intake`` accepts (which then refuses it, with its note). A name
     is accepted as ``intake`` accepts it (``Copy of 02_reward.ipynb``, ``02_reward (1).ipynb``,
-    ``s042_02_reward.ipynb``); of several files for one notebook the newest is graded."""
+    ``s042_02_reward.ipynb``); a notebook whose name names none of the assignment's
+    (``05_horizon_final.ipynb``) is known by its content, as intake knows it (``identify``, from the
+    instructor's notebooks); of several files for one notebook the newest is graded."""
+    import nbformat
+
     from . import intake
-    from .course import NOTEBOOKS
+    from .course import NOTEBOOKS, SOURCE
+    from .identify import Identifier
 
     names = intake._Names(NOTEBOOKS)     # the intake's own reading of a file name
+    identifier = None
     dest.mkdir(parents=True, exist_ok=True)
     found: dict[str, list] = {}
     notes, other = [], []
@@ -642,6 +648,23 @@ def stage(submission: Path, dest: Path) -> tuple[list[str], list[str]]:
             continue
         base = rel.rsplit("/", 1)[-1]
         parsed = names.parse(base) if base.casefold().endswith(".ipynb") else None
+        if parsed is None and base.casefold().endswith(".ipynb") and not stat.S_ISLNK(st.st_mode):
+            identifier = identifier or Identifier(
+                {n: nbformat.read(SOURCE / n, as_version=4) for n in NOTEBOOKS})
+            data = _read_capped(path, intake.MAX_NOTEBOOK_BYTES + 1)
+            try:
+                match = identifier.identify(intake.decode_notebook(data)) if data is not None else None
+            except ValueError:
+                match = None
+            if match is not None and match.notebook:
+                notes.append(f"{rel}: graded as {match.notebook}: its name names no notebook of this assignment, "
+                             f"but {match.words()}")
+                parsed = (None, match.notebook, intake._reupload(base)[1])
+            else:
+                why = f": {match.words()}" if match is not None else ""
+                notes.append(f"{rel}: not a notebook of this assignment ({names.expected}), by its name or by "
+                             f"its content{why}; not graded")
+                continue
         if parsed is None:
             if base.casefold().endswith(".ipynb"):
                 notes.append(f"{rel}: not a notebook of this assignment ({names.expected}), not graded")

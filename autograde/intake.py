@@ -46,7 +46,10 @@ It may carry a re-upload suffix, which also counts as "how many times re-uploade
 have the same time: ``02_reward (1)``, ``02_reward(2)``, ``02_reward-1``, ``02_reward_2``,
 ``02_reward_v2``, ``02_reward-Copy1`` (Jupyter's duplicate) all mean 02_reward. Colab's
 ``Copy of 02_reward`` is accepted as well. Anything else after the name (``02_reward_final``,
-``02_reward_solution``) is refused: it names no notebook of this assignment.
+``02_reward_solution``) names no notebook of this assignment: with the release at hand
+(``collect(release=...)``, as grading calls it) such a file of a known student is identified by
+its content (``identify``) and graded as what it holds, and so is a file whose name says one
+notebook and whose content is another; without it, the file is refused.
 
 Student ids (see :func:`normalise_student_id`): the id the LMS wrote is kept for the report
 (``Intake.display_names``) and turned into ONE folder-safe form that nbgrader uses as folder name
@@ -81,6 +84,7 @@ from typing import Callable
 import nbformat
 
 from . import lms_layouts
+from .identify import Identifier
 from .lms_layouts import LayoutError  # noqa: F401  (the download cannot be read: grade.main says why)
 
 MB = 2 ** 20
@@ -152,7 +156,15 @@ class Intake:
              "late": True | False (Canvas's LATE marker) | None (Moodle, Blackboard: not in the names),
              "submitted_at": ISO 8601 local time without zone (Blackboard) | None,
              "attempt": the graded attempt's number among this student's attempts in the
-                        download, oldest first (Blackboard) | None}
+                        download, oldest first (Blackboard) | None,
+             "attachment_ids": {"02_reward.ipynb": "678", ...}: the file id of each graded
+                        notebook's upload (Canvas) | None}
+
+    ``human``: with the release to identify notebooks by (``collect(release=...)``), one entry per
+        file whose name did not decide what it is, for the class report's "needs a human": a
+        renamed file graded by its content, one that matches no notebook, two files that are one
+        notebook (the newest graded). ``{"student": id, "file": the name as uploaded, "graded":
+        the notebook it was graded as, or None, "why": words}``; the student's notes say the same.
     """
     students: dict[str, dict[str, Upload]] = field(default_factory=dict)
     notes: dict[str, list[str]] = field(default_factory=dict)
@@ -161,6 +173,7 @@ class Intake:
     lookalikes_checked: bool = False
     warnings: list[str] = field(default_factory=list)
     lms: dict[str, dict] = field(default_factory=dict)
+    human: list[dict] = field(default_factory=list)
 
 
 class _Refused(Exception):
@@ -257,6 +270,8 @@ def _is_junk(parts: list[str]) -> bool:
 
 class _Names:
     """Parses the file-name part of a member against the assignment's notebooks."""
+
+    identifier: Identifier | None = None     # set by collect when it has the release
 
     def __init__(self, notebooks: list[str]):
         bad = [n for n in notebooks if not n.endswith(".ipynb")]
@@ -413,6 +428,10 @@ class _Candidate:
     counter: int
     order: int
     lms: lms_layouts.LmsFile | None = None     # in an LMS layout: what the LMS's name says
+    by_name: str | None = None     # the notebook its file name names (None: it names none)
+    data: bytes | None = None      # read ahead to identify it by content (``_identify``)
+    error: str = ""                # why it could not be read, when read ahead
+    renamed: str = ""              # why its content, not its name, decided its notebook (said if graded)
 
     def newness(self) -> tuple:
         """Larger is newer: the LMS's own order first (Canvas's file id, Blackboard's attempt
@@ -423,7 +442,7 @@ class _Candidate:
         return self.lms.label if self.lms else _short(self.entry)
 
 
-def collect(submissions: Path, notebooks: list[str], *,
+def collect(submissions: Path, notebooks: list[str], *, release: dict | None = None,
             max_member_bytes: int = MAX_NOTEBOOK_BYTES,
             max_total_bytes: int = MAX_TOTAL_BYTES,
             max_members: int = MAX_MEMBERS) -> Intake:
@@ -450,10 +469,17 @@ def collect(submissions: Path, notebooks: list[str], *,
       in the archive); the note names the one graded and those ignored. If the newest cannot be
       read at all (too big, corrupt), the next newest is graded and the note says so;
     * a download in Canvas's, Moodle's or Blackboard's own layout is read by that LMS's ids
-      (module docstring; ``Intake.lms``); one that mixes two of them raises ValueError.
+      (module docstring; ``Intake.lms``); one that mixes two of them raises ValueError;
+    * with ``release`` (``{file name: released notebook}``), every notebook is identified by its
+      content (``identify``), so a student's file is graded as what it is whatever it is called:
+      ``05_horizon_final.ipynb`` is graded as 05_horizon, a file named 04 that holds 05 as 05. Its
+      name decides only where its content does not (a notebook too damaged to tell); a file that
+      neither its name nor its content places, and two files that are one notebook by content
+      under different names (the newest is graded), go to ``Intake.human`` and the student's notes.
     """
     submissions = Path(submissions)
     names = _Names(notebooks)
+    names.identifier = Identifier(release) if release else None
     intake = Intake()
     rejected = intake.rejected
     if submissions.is_dir():
@@ -538,6 +564,8 @@ def _collect(entries: list[_Entry], names: _Names, intake: Intake,
                 pending_notes.append((who, f"{base}: not a .ipynb notebook, not graded. {REDOWNLOAD}"))
             continue
         parsed = names.parse(base)
+        if parsed is None and names.identifier is not None and (folder or names.loose_prefix(base)):
+            parsed = (None if folder else names.loose_prefix(base), None, 0)     # its content will tell
         if parsed is None:
             who = folder or names.loose_prefix(base)
             if folder is None and who is None:
@@ -579,13 +607,70 @@ def _collect(entries: list[_Entry], names: _Names, intake: Intake,
             known.add(original)
             continue
         known.add(original)
-        candidates.append(_Candidate(e, original, notebook, counter, order))
+        candidates.append(_Candidate(e, original, notebook, counter, order, by_name=notebook))
 
     # 4. one folder-safe id per student as written; collisions are told, never merged
     ids = _assign_ids(known, intake)
-    # 5. the newest readable upload of each notebook
-    _pick_newest(candidates, ids, intake, max_member_bytes, max_total_bytes)
+    # 5. what each file is, by its content; then the newest readable upload of each notebook
+    candidates, total = _identify(candidates, ids, names, intake, max_member_bytes, max_total_bytes)
+    _pick_newest(candidates, ids, intake, max_member_bytes, max_total_bytes, total=total)
     return _finish(intake, ids, pending_notes)
+
+
+def _identify(candidates: list[_Candidate], ids: dict[str, str], names: _Names, intake: Intake,
+              max_member_bytes: int, max_total_bytes: int, total: int = 0) -> tuple[list[_Candidate], int]:
+    """Read every candidate ahead and decide which notebook it is by its content (``identify``;
+    ``collect``'s rules); ``total``: bytes already read. Returns the candidates that are some
+    notebook (``notebook`` set: by content where it tells, else by name) and the bytes read."""
+    if names.identifier is None:
+        return candidates, total
+    kept = []
+    for c in candidates:
+        base, sid = _base(c), ids[c.original]
+        if total + c.entry.size > max_total_bytes:
+            c.error = f"the class download passed the {_size(max_total_bytes)} limit for all files together"
+        else:
+            try:
+                c.data = c.entry.read(min(max_member_bytes, max_total_bytes - total))
+                total += len(c.data)
+            except _Refused as why:
+                c.error = str(why)
+        match = None
+        if c.data is not None:
+            try:
+                match = names.identifier.identify(decode_notebook(c.data, max_member_bytes))
+            except ValueError:
+                pass                          # prepare tells the student why it cannot be read
+        if match is not None and match.notebook and match.notebook != c.by_name:
+            c.notebook = match.notebook
+            if c.by_name is None:
+                c.counter = _reupload(base)[1]     # "_final (2)" is newer than "_final" on a tie
+            if c.by_name is None:
+                c.renamed = f"its name names no notebook of this assignment, but {match.words()}"
+            else:
+                c.renamed = f"its name says {c.by_name}, but {match.words()}"
+        elif c.by_name is None:
+            if c.error:
+                why = f"it could not be read ({c.error})"
+            elif match is None:
+                why = "it is not a notebook that can be read (decoding failed)"
+            else:
+                why = match.words()
+            intake.rejected.append(f"{c.entry.member!r}: refused: names no notebook of this assignment, and by "
+                                   f"its content it is none of them either: {why}")
+            intake.notes.setdefault(sid, []).append(
+                f"{base}: not graded: its name names no notebook of this assignment and {why}; the notebooks "
+                f"are {names.expected}. Upload the notebook you worked in, as it was released")
+            intake.human.append({"student": sid, "file": base, "graded": None, "why": why})
+            continue
+        elif match is not None and not match.notebook and match.runner_up is None:
+            why = f"its name says {c.by_name}, but {match.words()}"
+            intake.notes.setdefault(sid, []).append(f"{base}: graded as {c.by_name} by its name only: {why}; "
+                                                    f"if this is not the notebook you worked in, upload that one")
+            intake.human.append({"student": sid, "file": base, "graded": c.by_name,
+                                 "why": why + ": check it is the notebook the student meant"})
+        kept.append(c)
+    return kept, total
 
 
 def _pick_newest(candidates: list[_Candidate], ids: dict[str, str], intake: Intake,
@@ -602,7 +687,12 @@ def _pick_newest(candidates: list[_Candidate], ids: dict[str, str], intake: Inta
         group.sort(key=_Candidate.newness, reverse=True)
         graded, failed = None, []
         for c in group:
-            if total + c.entry.size > max_total_bytes:
+            if c.data is not None or c.error:        # read ahead by _identify
+                if c.data is not None:
+                    graded = (c, c.data)
+                    break
+                why = c.error
+            elif total + c.entry.size > max_total_bytes:
                 why = f"the class download passed the {_size(max_total_bytes)} limit for all files together"
             else:
                 try:
@@ -620,6 +710,10 @@ def _pick_newest(candidates: list[_Candidate], ids: dict[str, str], intake: Inta
             continue
         c, data = graded
         chosen[(sid, notebook)] = c
+        if c.renamed:                  # graded as what it holds (_identify): said to the student and to a human
+            intake.notes.setdefault(sid, []).append(f"{_base(c)}: graded as {notebook}: {c.renamed}")
+            if len({_stem(x) for x in group}) == 1:      # else the entry for two files of one notebook says it
+                intake.human.append({"student": sid, "file": _base(c), "graded": notebook, "why": c.renamed})
         intake.students.setdefault(sid, {})[notebook] = Upload(data, c.entry.member, c.entry.mtime)
         ignored = group[group.index(c) + 1:]     # older than the graded one
         if len(group) > 1:
@@ -630,7 +724,31 @@ def _pick_newest(candidates: list[_Candidate], ids: dict[str, str], intake: Inta
             if ignored:
                 line += "; ignored the older " + ", ".join(x.short() for x in ignored)
             notes.append(line)
+            if len({_stem(x) for x in group}) > 1:   # differently named files, one notebook by content
+                intake.human.append({"student": sid, "file": ", ".join(_base(x) for x in group), "graded": notebook,
+                                     "why": f"{len(group)} files are {notebook} by their content; the newest, "
+                                            f"{_base(c)}, was graded: check it is the one the student meant"})
     return chosen
+
+
+def _base(c: _Candidate) -> str:
+    return c.lms.original if c.lms else c.entry.parts[-1]
+
+
+_REUPLOAD = re.compile(rf"^(?:copy of\s*)*(?P<stem>.*?){_SUFFIX}(?:\.ipynb)?$", re.IGNORECASE)
+
+
+def _reupload(base: str) -> tuple[str, int]:
+    """(the name less an upload's re-upload marks, its counter): ``Copy of x (2).ipynb`` -> ("x", 2),
+    as ``_Names.parse`` reads a notebook's name, for any name."""
+    m = _REUPLOAD.match(base.strip())
+    return m["stem"].strip().casefold(), int(m["n1"] or m["n2"] or 0)
+
+
+def _stem(c: _Candidate) -> str:
+    """One name for a file and its re-uploads: the notebook its name names, else its own name less
+    the re-upload marks (``05_horizon_final-1.ipynb`` and ``05_horizon_final.ipynb`` are one)."""
+    return c.by_name or _reupload(_base(c))[0]
 
 
 _NEWEST = {"canvas": "the newest (Canvas numbers the files it keeps in the order they were uploaded)",
@@ -717,6 +835,8 @@ def _collect_lms(usable: list[_Entry], system: str, wrapped: bool, names: _Names
             pending_notes.append((who, f"{base}: not a .ipynb notebook, not graded. {REDOWNLOAD}"))
             continue
         parsed = names.parse(base)
+        if parsed is None and names.identifier is not None:
+            parsed = (None, None, 0)                  # its content will tell
         if parsed is None:
             rejected.append(f"{e.member!r}: refused: names no notebook of this assignment "
                             f"(expected one of {names.expected})")
@@ -730,13 +850,18 @@ def _collect_lms(usable: list[_Entry], system: str, wrapped: bool, names: _Names
             pending_notes.append((who, f"{base}: {_size(e.size)}, too big to be this notebook; "
                                        f"not graded. Clear the outputs, save, and upload it again"))
             continue
-        candidates.append(_Candidate(e, who, notebook, counter, order, lms=f))
+        candidates.append(_Candidate(e, who, notebook, counter, order, lms=f, by_name=notebook))
 
     ids = _assign_ids(set(files_of), intake)
+    candidates, read_so_far = _identify(candidates, ids, names, intake, max_member_bytes, max_total_bytes,
+                                        total=read_so_far)
     chosen = _pick_newest(candidates, ids, intake, max_member_bytes, max_total_bytes, total=read_so_far)
     for who, sid in ids.items():
         graded = [c.lms for (s, _), c in chosen.items() if s == sid]
         record, notes = lms_layouts.summarise(system, files_of[who], graded)
+        # Canvas: each graded notebook's own upload, for returning its page under its name (lms_feedback)
+        record["attachment_ids"] = {nb: c.lms.file_id for (s, nb), c in sorted(chosen.items())
+                                    if s == sid and c.lms.file_id} if system == "canvas" else None
         intake.lms[sid] = record
         intake.notes.setdefault(sid, [])[:0] = notes
     return _finish(intake, ids, pending_notes)

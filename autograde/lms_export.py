@@ -259,6 +259,8 @@ def read_standings(course: Path, report: dict) -> tuple[dict[str, Standing], flo
             undecided = {(nb, g) for nb, g, _ in (report[student] or {}).get("undecided") or ()}
             for nb in sorted(sub.notebooks, key=lambda n: n.name):
                 grades = list(nb.grades)
+                if not grades:             # a notebook with no graded cell (01_world_model): nothing to say
+                    continue
                 touched = any(g.auto_score is not None or g.manual_score is not None or not g.needs_manual_grade
                               for g in grades)
                 if not touched and f"{nb.name}.ipynb" not in failed:
@@ -304,8 +306,13 @@ def write_lms_exports(course: Path, report: dict, *, settings: dict | None = Non
 
     ``report``: grade_class's per-student dict; ``report[s]["lms"]`` is None/absent or
     ``{"system", "name", "ids", "late", "submitted_at", "attempt"}``. ``settings``: an ``lms:``
-    mapping to use instead of course.yaml's. Returns the three paths. Both CSV files are always
-    written, with their header, even with no student in them."""
+    mapping to use instead of course.yaml's. Returns the paths written.
+
+    An import file is written only for an LMS it can serve (:func:`systems_served`): the LMS the
+    download came from, or one whose ``student_ids_are`` in course.yaml says what the ids of a
+    generic download are. Another LMS's file left by an earlier run in the same course folder is
+    removed (it would hold another class's scores); the notes file says which files were written,
+    which were not and why."""
     course = Path(course)
     cfg, warnings = lms_settings(settings)
     now = now or datetime.now(timezone.utc)
@@ -318,22 +325,50 @@ def write_lms_exports(course: Path, report: dict, *, settings: dict | None = Non
     def lms_points(st: Standing) -> str:
         return _num(st.points * scale)
 
-    canvas = _canvas_sheet(report, standings, cfg, lms_max, lms_points)
-    moodle = _moodle_sheet(report, standings, cfg, lms_max, lms_points, now)
-
-    paths = [course / CANVAS_FILE, course / MOODLE_FILE, course / NOTES_FILE]
-    for path, sheet in zip(paths, (canvas, moodle)):
-        _write_csv(path, sheet.header, [*sheet.lead, *(r for _, r in sheet.rows)])
-    notes = _notes(report, standings, total, lms_max, warnings, [canvas, moodle], now, course)
-    _write_atomic(paths[2], notes.encode("utf-8"))
+    served = systems_served(report, cfg)
+    sheets = []
+    if "canvas" in served:
+        sheets.append(_canvas_sheet(report, standings, cfg, lms_max, lms_points))
+    if "moodle" in served:
+        sheets.append(_moodle_sheet(report, standings, cfg, lms_max, lms_points, now))
+    paths = []
+    for sheet in sheets:
+        paths.append(course / sheet.file)
+        _write_csv(paths[-1], sheet.header, [*sheet.lead, *(r for _, r in sheet.rows)])
+    for system, file in (("canvas", CANVAS_FILE), ("moodle", MOODLE_FILE)):
+        if system not in served:
+            if (course / file).is_file():
+                (course / file).unlink()
+                warnings.append(f"removed {file}, left by an earlier grading in this course folder: this "
+                                f"download is not {SYSTEMS[system]}'s")
+    if not sheets:
+        warnings.append("no import file written: the download is in no LMS's own layout (Canvas, Moodle, Blackboard) "
+                        "and course.yaml's lms.canvas.student_ids_are / lms.moodle.student_ids_are do not say "
+                        "what its student ids are")
+    if "blackboard" in served:
+        warnings.append("Blackboard: no import file is written (grades.csv has every score; Blackboard's "
+                        "Grade Center takes them by hand or by its own upload)")
+    notes = _notes(report, standings, total, lms_max, warnings, sheets, now, course)
+    paths.append(course / NOTES_FILE)
+    _write_atomic(paths[-1], notes.encode("utf-8"))
     for line in warnings:
         log(f"WARNING: lms export: {line}")
-    for sheet in (canvas, moodle):
+    for sheet in sheets:
         left = len(sheet.pending) + sum(map(len, sheet.missing.values())) + sum(len(s) for s, _ in sheet.conflicts)
         waiting = f", {len(sheet.pending)} of them waiting for hand-graded answers" if sheet.pending else ""
         log(f"{sheet.file}: {_count(len(sheet.rows))}" +
             (f"; {left} not in it{waiting}: see {NOTES_FILE}" if left else ""))
     return paths
+
+
+def systems_served(report: dict, cfg: dict) -> set[str]:
+    """The LMSs an import file can serve: those of the students' own records (the download's
+    layout), and Canvas or Moodle where course.yaml says what a generic download's ids are."""
+    served = {lms["system"] for lms in map(_lms, report.values()) if lms}
+    for system in ("canvas", "moodle"):
+        if cfg[system].get("student_ids_are"):
+            served.add(system)
+    return served
 
 
 def _canvas_sheet(report, standings, cfg, lms_max, lms_points) -> _Sheet:
@@ -556,12 +591,17 @@ def _clean_text(text: str) -> str:
     return " ".join(_CONTROL.sub(" ", text).split())
 
 
+def spreadsheet_text(text: str) -> str:
+    """``text`` fit for a spreadsheet cell: no control characters, and never read as a formula."""
+    text = _clean_text(str(text))
+    return "'" + text if text.startswith(_FORMULA) else text
+
+
 def _name(rep, student: str) -> str:
     """The student's name for a file: the LMS's, else the id; no control characters, no formula."""
     lms = _lms(rep)
     name = _clean_text(str(lms.get("name") or "")) if lms else ""
-    name = name or student
-    return "'" + name if name.startswith(_FORMULA) else name
+    return spreadsheet_text(name or student)
 
 
 def _num(x: float | None) -> str:

@@ -466,6 +466,29 @@ def looks_like(parts: list[str], parse_notebook: NotebookParser) -> set[str]:
     return s
 
 
+def _canvas_vouched(parts: list[list[str]], looks: list[set[str]], parse_notebook: NotebookParser) -> list[int]:
+    """Members named ``<name>_<user id>_<file id>_<file>`` whose own file part names no notebook (a
+    student's renaming, ``05_horizon_final.ipynb``, which intake identifies by its content) that
+    follow Canvas's naming all the same: those whose (user id, name) reading is also the reading of
+    a member that follows it in full. The student's other files vouch for the reading; a generic
+    ``s1_2_02_reward.ipynb`` has no such voucher, so it stays what ``looks_like`` says."""
+    def readings(base, strict):
+        out = set()
+        for anonymous in (False, True):
+            for x in _canvas_splits(base, anonymous):
+                if x["made"] or not strict or parse_notebook(_canvas_display(x["display"])) is not None:
+                    out.add((x["uid"], x["name"]))
+        return out
+
+    vouchers = set()
+    for p, one in zip(parts, looks):
+        if "canvas" in one:
+            vouchers |= readings(p[0], strict=True)
+    return [i for i, (p, one) in enumerate(zip(parts, looks))
+            if vouchers and "canvas" not in one and len(p) == 1 and _CANVAS_LOOSE.match(p[0])
+            and readings(p[0], strict=False) & vouchers]
+
+
 def detect(members: list[list[str]], parse_notebook: NotebookParser) -> tuple[str | None, bool, str]:
     """(the LMS whose layout the download is in, or None; whether one folder around everything is
     to be skipped; a line for the instructor when the answer is not clear-cut, else "").
@@ -480,6 +503,8 @@ def detect(members: list[list[str]], parse_notebook: NotebookParser) -> tuple[st
     note = ""
     for wrapper, parts in variants:
         looks = [looks_like(p, parse_notebook) for p in parts]
+        for i in _canvas_vouched(parts, looks, parse_notebook):
+            looks[i] = looks[i] | {"canvas"}
         count = Counter(s for one in looks for s in one)
         only = {s: [p for p, one in zip(parts, looks) if one == {s}] for s in SYSTEMS}
         mixed = [s for s in SYSTEMS if only[s]]

@@ -41,6 +41,8 @@ CLASS = 40
 HOSTILE = '<img src=x onerror=alert(1)>"&'        # an id no LMS should allow, graded all the same
 BIDI = "stu_\u202eevil"                            # a right-to-left override inside an id
 LOOKALIKE = ("victim_2", "v\u0456ctim_2")          # a Cyrillic i
+RENAMER = "stu_007"                                  # handed in a renamed file and a stray one (intake.human)
+RENAMER_NAME = "O'Brien <Seán>"
 NOTEBOOKS = sorted(p.name for p in (ROOT / "solutions").glob("*.ipynb"))
 GRADED_CODE = {t.test_id: t for t in checks.TESTS.values()}
 
@@ -222,6 +224,13 @@ def _students(plan, release, verdicts, looks, answer_note, rng, report, results,
             res[name] = entry
         if s == "stu_005":
             rep["notes"].append(answer_note)
+        if s == RENAMER:
+            rep["name"] = RENAMER_NAME
+            rep["tripwires"] = ["04_imagination_gap dream_impl_tests: the grader could not run dream again"]
+            rep["human"] = [{"student": s, "file": "05_horizon_final.ipynb", "graded": "05_horizon.ipynb",
+                             "why": "its name names no notebook of this assignment, but it holds 97% of 05_horizon.ipynb's cells"},
+                            {"student": s, "file": "<scratch>.ipynb", "graded": None,
+                             "why": "it holds at most 4% of any notebook's cells (at least 30% are needed)"}]
         if i % 11 == 3 or s == BIDI:
             rep["lms"] = {"system": "Canvas", "name": f"<b>Zo\u00eb</b> {i}", "late": True,
                           "submitted_at": "2026-01-02T10:00:00Z"}
@@ -443,13 +452,17 @@ def test_hostile_strings_are_escaped_and_only_flagged_ids_appear(klass):
     assert not [k for _, a in p.tags for k in a if k.startswith("on")]
     assert p.tags[2] == ("meta", {"http-equiv": "Content-Security-Policy", "content": class_report.CSP})
     flags = {(a["data-kind"]) for a in with_attr(p, "data-kind") if "data-count" in a}
-    assert flags == {"answer key", "look-alike id", "not finished", "late"}
-    flagged = {s for s in klass["report"] if s in (HOSTILE, "stu_005", *LOOKALIKE) or
+    assert flags == {"answer key", "look-alike id", "not finished", "late", "file graded by content", "file not graded",
+                     "grader could not run it"}          # was flagged, and shown under no heading, until issue 39
+    flagged = {s for s in klass["report"] if s in (HOSTILE, "stu_005", RENAMER, *LOOKALIKE) or
                (klass["report"][s].get("lms") or {}).get("late")}
     for s in klass["report"]:
         assert (class_report._t(s, 128) in text) == (s in flagged), s
     counts = {a["data-kind"]: int(a["data-count"]) for a in with_attr(p, "data-kind") if "data-count" in a}
     assert counts["look-alike id"] == 2 and counts["answer key"] == 1
+    assert counts["file graded by content"] == counts["file not graded"] == 1
+    # the name beside the id, escaped; the files named, escaped
+    assert "O&#x27;Brien &lt;Seán&gt;" in text and "&lt;scratch&gt;.ipynb" in text and "05_horizon_final.ipynb" in text
     assert counts["late"] == sum(1 for r in klass["report"].values() if (r.get("lms") or {}).get("late"))
 
 
@@ -477,8 +490,13 @@ def test_the_page_opens_in_chromium(klass):
         page.wait_for_load_state("load")
         images = page.evaluate("[...document.images].map(i => [i.complete, i.naturalWidth, i.naturalHeight])")
         title = page.title()
+        shown = page.evaluate("""Object.fromEntries([...document.querySelectorAll('details[data-kind]')].map(
+            d => [d.dataset.kind, [...d.querySelectorAll('tr.flag')].map(r => r.innerText)]))""")
         page.close()
     assert not [m for m in seen["console"] if m.startswith("error")] and not seen["errors"], seen
     assert seen["requests"] == [klass["page"].as_uri()], seen["requests"]
     assert len(images) == 3 and all(ok and w > 300 and h > 100 for ok, w, h in images), images
     assert title == f"Class report: {ASSIGNMENT}"
+    # what a human must look at, as the instructor reads it: each file, with the student's name and id
+    for kind, file in (("file graded by content", "05_horizon_final.ipynb"), ("file not graded", "<scratch>.ipynb")):
+        assert any(file in row and RENAMER in row and RENAMER_NAME in row for row in shown[kind]), (kind, shown[kind])

@@ -410,16 +410,18 @@ def test_the_hand_in_is_staged_as_the_intake_names_it(tmp_path):
     (sub / "deep" / "er" / "ann_lee_05_horizon (2).ipynb").write_text("{}")
     (sub / "06_closing_the_gap.py").write_text("")
     (sub / "07_bonus.ipynb").write_text("{}")
+    (sub / "deep" / "04 my final version.ipynb").write_bytes((ROOT / "solutions" / "04_imagination_gap.ipynb").read_bytes())
     (sub / "__MACOSX").mkdir()
     (sub / "__MACOSX" / "._02_reward.ipynb").write_text("")
     os.symlink("/etc/passwd", sub / "03_imagination_actor.ipynb")
     staged, notes = gradescope.stage(sub, tmp_path / "dest" / "student")
-    assert staged == ["02_reward.ipynb", "05_horizon.ipynb"]
+    assert staged == ["02_reward.ipynb", "04_imagination_gap.ipynb", "05_horizon.ipynb"]
     assert (tmp_path / "dest" / "student" / "02_reward.ipynb").read_text() == "{}"      # the newest of two
     text = " | ".join(notes)
     assert "graded Copy of 02_reward.ipynb, the newest, not 02_reward.ipynb" in text
     assert "03_imagination_actor.ipynb: a link, not a file, not graded" in text
-    assert "07_bonus.ipynb: not a notebook of this assignment" in text
+    assert "07_bonus.ipynb: not a notebook of this assignment" in text and "by its name or by its content" in text
+    assert "deep/04 my final version.ipynb: graded as 04_imagination_gap.ipynb" in text   # known by its content
     assert "06_closing_the_gap.py" in text and "._02_reward" not in text
 
 

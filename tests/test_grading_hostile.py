@@ -277,11 +277,11 @@ def test_without_a_sandbox_grading_runs_and_warns(tmp_path, monkeypatch):
     monkeypatch.setattr(sandbox, "available", lambda: (False, "bubblewrap is not installed"))
     course = tmp_path / "course"
     course.mkdir()
-    with zipfile.ZipFile(tmp_path / "empty.zip", "w") as zf:
-        zf.writestr("readme.txt", "no notebooks here")
+    with zipfile.ZipFile(tmp_path / "class.zip", "w") as zf:   # one student, whose one file runs nothing
+        zf.writestr("s1_02_reward.ipynb", "not notebook JSON")
     lines = []
     with pytest.warns(UserWarning, match="NOT confined"):
-        grade.grade_class(tmp_path / "empty.zip", course, log=lines.append)
+        grade.grade_class(tmp_path / "class.zip", course, log=lines.append)
     assert any("NOT confined" in line and "bubblewrap is not installed" in line for line in lines)
     # and its guarantees, first, say that none held (autograde/guarantees.py)
     assert any(line.startswith("guarantees of this run: 5 of 5 NOT held") for line in lines)

@@ -125,7 +125,8 @@ def test_canvas_file_is_the_gradebook_import_layout(course):
     report = grade(course, {s: (canvas_id(100 + i, NAMES[s]), "answered") for i, s in enumerate(NAMES)},
                    manual={"ann": 1, "bob": 0.5, "zoe": 0, "eve": 1})
     paths = write_lms_exports(course, report, settings=CANVAS, log=lambda _: None, now=NOW)
-    assert [p.name for p in paths] == [CANVAS_FILE, MOODLE_FILE, NOTES_FILE] and all(p.is_file() for p in paths)
+    assert [p.name for p in paths] == [CANVAS_FILE, NOTES_FILE] and all(p.is_file() for p in paths)
+    assert not (course / MOODLE_FILE).exists()          # a Canvas class gets no Moodle file
     raw, rows = read_csv(course / CANVAS_FILE)
     assert_lms_encoding(raw)
     assert raw.startswith("\ufeffStudent,ID,SIS User ID,SIS Login ID,Section,World models 3.2 (4711)\r\n"
@@ -261,18 +262,37 @@ def test_a_notebook_that_crashed_keeps_its_answer_pending_and_its_tests_at_0(cou
     assert "So far 5 of 9 points, 1 still to grade; also: 04_imagination_gap dream_impl_tests: no result" in notes
 
 
-def test_files_are_written_for_zero_students(course, tmp_path):
+def test_import_files_only_for_the_lms_they_serve(course, tmp_path):
+    """No student of any LMS and no course.yaml mapping: no import file, and the notes say why; a
+    mapping of generic ids to Canvas SIS ids: Canvas's file, even for zero students; an earlier run's
+    file for another LMS is removed, not left to be uploaded with another class's scores."""
+    (course / MOODLE_FILE).write_text("an earlier run's scores")
     paths = write_lms_exports(course, {}, settings=CANVAS, log=lambda _: None, now=NOW)
+    assert [p.name for p in paths] == [NOTES_FILE] and not (course / CANVAS_FILE).exists()
+    notes = paths[0].read_text()
+    assert "no import file written" in notes and f"removed {MOODLE_FILE}" in notes
+    assert not (course / MOODLE_FILE).exists()
+    sis = {"canvas": {**CANVAS["canvas"], "student_ids_are": "sis_user_id"}}
+    paths = write_lms_exports(course, {}, settings=sis, log=lambda _: None, now=NOW)
     assert (course / CANVAS_FILE).read_bytes() == ("\ufeffStudent,ID,SIS User ID,SIS Login ID,Section,"
                                                    "World models 3.2 (4711)\r\n    Points Possible,,,,,9\r\n").encode()
-    assert (course / MOODLE_FILE).read_bytes() == \
-        "\ufeffIdentifier,Full name,Grade,Maximum grade,Last modified (grade)\r\n".encode()
-    assert "0 students" in paths[2].read_text()
+    assert not (course / MOODLE_FILE).exists() and "0 students" in paths[-1].read_text()
     empty = tmp_path / "no_gradebook"                       # not even a gradebook: still the headers, and why
     empty.mkdir()
-    write_lms_exports(empty, {}, settings={}, log=lambda _: None, now=NOW)
+    write_lms_exports(empty, {}, settings={"canvas": {"student_ids_are": "sis_user_id"}}, log=lambda _: None, now=NOW)
     assert read_csv(empty / CANVAS_FILE)[1][1] == ["    Points Possible", "", "", "", "", ""]
     assert "no gradebook" in (empty / NOTES_FILE).read_text() and not (empty / "gradebook.db").exists()
+
+
+def test_a_notebook_without_graded_cells_is_never_called_ungraded(course):
+    """01_world_model has no graded cell: the notes never say it 'was not graded'."""
+    from nbgrader.api import Gradebook
+
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
+        gb.update_or_create_notebook("01_world_model", ASSIGNMENT)
+    report = grade(course, {"ann": (canvas_id(100, NAMES["ann"]), "answered")}, manual={"ann": 1})
+    paths = write_lms_exports(course, report, settings=CANVAS, log=lambda _: None, now=NOW)
+    assert "01_world_model" not in paths[-1].read_text()
 
 
 def test_course_yaml_lms_section_is_read_and_bad_values_are_named():

@@ -3,11 +3,10 @@ each student is found by the LMS's own id, keeps that identity in ``Intake.lms``
 upload of each notebook is graded; late markers, attempts and receipts are recorded in words.
 
 Fast: tiny notebooks and zips built in tmp_path (``autograde/classes/lms.py`` names the files as
-each LMS does), no kernel; except ``test_lms_downloads_grade_end_to_end``, which grades a Canvas and
-a Moodle download with real nbgrader, as cheaply as tests/test_grading_dask.py's small class.
+each LMS does), no kernel. Grading a download of each LMS with real nbgrader, from intake to the
+feedback returned, is tests/test_instructor_week.py.
 """
 
-import csv
 import stat
 import time
 import unicodedata
@@ -23,7 +22,7 @@ from autograde.classes import lms
 from autograde.intake import collect
 
 NOTEBOOKS = ["01_world_model.ipynb", "02_reward.ipynb", "03_imagination_actor.ipynb"]
-RECORD_KEYS = {"system", "name", "ids", "late", "submitted_at", "attempt"}
+RECORD_KEYS = {"system", "name", "ids", "late", "submitted_at", "attempt", "attachment_ids"}
 
 
 def notebook_bytes(tag: str) -> bytes:
@@ -70,7 +69,9 @@ def test_canvas_download_is_read_by_user_id_with_late_marker_and_resubmission(tm
     assert all(set(uploads) == set(NEW) for uploads in intake.students.values())
     assert intake.lms["canvas_1001"] == {"system": "canvas", "name": "leeann",
                                          "ids": {"user_id": "1001", "attachment_id": "40002"},
-                                         "late": False, "submitted_at": None, "attempt": None}
+                                         "late": False, "submitted_at": None, "attempt": None,
+                                         "attachment_ids": {"01_world_model.ipynb": "40001",
+                                                            "02_reward.ipynb": "40002"}}
     zoe = intake.lms["canvas_1002"]
     assert zoe["name"] == "müllerzoë" and zoe["late"] is True and zoe["ids"]["user_id"] == "1002"
     assert graded(intake, "canvas_1002").member.startswith("müllerzoë_LATE_1002_")
@@ -103,7 +104,8 @@ def test_canvas_names_of_the_older_format_anonymous_grading_text_entries_and_uui
     assert list(anon.students) == ["canvas_anon_Ab3dE", "canvas_anon_x1Y2z"] and anon.rejected == []
     assert anon.lms["canvas_anon_Ab3dE"] == {"system": "canvas", "name": None,
                                              "ids": {"user_id": "anon_Ab3dE", "attachment_id": "71"},
-                                             "late": True, "submitted_at": None, "attempt": None}
+                                             "late": True, "submitted_at": None, "attempt": None,
+                                             "attachment_ids": {"02_reward.ipynb": "71"}}
 
 
 @pytest.mark.parametrize("folders", [True, False])
@@ -113,7 +115,7 @@ def test_moodle_download_is_read_by_participant_id(tmp_path, folders):
     assert intake.rejected == [] and intake.warnings == []
     zoe = intake.lms["moodle_5301277"]
     assert zoe == {"system": "moodle", "name": "Zoë Müller", "ids": {"participant_id": "5301277"},
-                   "late": None, "submitted_at": None, "attempt": None}
+                   "late": None, "submitted_at": None, "attempt": None, "attachment_ids": None}
     assert graded(intake, "moodle_5301277").member.startswith("Zoë Müller_5301277_assignsubmission_file")
     assert intake.lms["moodle_5301279"]["name"] == "Seán OBrien"
     up = graded(intake, "moodle_5301279")
@@ -138,7 +140,7 @@ def test_blackboard_download_latest_attempt_wins_and_receipts_are_read(tmp_path)
     assert intake.rejected == [] and intake.warnings == []         # receipts are not "unrecognised"
     jdoe = intake.lms["blackboard_jdoe"]
     assert jdoe == {"system": "blackboard", "name": "Jane Doe", "ids": {"username": "jdoe"}, "late": None,
-                    "submitted_at": "2026-03-02T09:30:15", "attempt": 2}
+                    "submitted_at": "2026-03-02T09:30:15", "attempt": 2, "attachment_ids": None}
     assert all(graded(intake, "blackboard_jdoe", n).data == NEW[n] for n in NEW)
     summary = intake.notes["blackboard_jdoe"][0]
     assert "2 attempts in this download (2026-03-01 10:00:00, 2026-03-02 09:30:15)" in summary
@@ -383,71 +385,3 @@ def test_an_lms_download_of_a_large_class_is_read_quickly(tmp_path):
     intake = intake_of(tmp_path, members)
     assert len(intake.lms) == 300 and intake.rejected == []
     assert time.perf_counter() - t < 10
-
-
-# --- grading a Canvas and a Moodle download --------------------------------------------------------
-TIMEOUT = 120   # seconds per cell, as tests/test_grading_dask.py: a loaded machine must not time out a correct cell
-
-
-def test_lms_downloads_grade_end_to_end(executed_solutions, tmp_path):
-    """A 3-student Canvas download (one late, one who handed in twice: a wrong notebook, then a
-    right one) and a Moodle one (a participant whose name has a space and an accent, who also
-    handed in twice), graded with the grader's one command. Only notebook 02 (the cheapest to
-    grade), no shared stages: four notebooks graded, one fewer than tests/test_grading_dask.py's
-    small class (measured on 2 cores shared with other work, load 4.5: 25 s + 10 s here, 40 s for
-    that class). Every student earns the reward tests' 4 points, which a resubmission's older,
-    wrong notebook would not."""
-    from nbgrader.api import Gradebook
-
-    from autograde import grade
-    from autograde.classes.synthetic import build
-    from autograde.course import ASSIGNMENT, COURSE_ID
-
-    files = build(executed_solutions)
-    right = {"02_reward.ipynb": files["perfect_02_reward.ipynb"]}
-    wrong = {"02_reward.ipynb": files["wrong_02_reward.ipynb"]}
-    moodle = {k: v for k, v in lms.moodle(right, wrong).items() if k.startswith("Seán OBrien_5301279_")}
-    blackboard = {k: v for k, v in lms.blackboard(right, wrong).items() if "_jdoe_attempt_" in k}
-    downloads = {"canvas": (make_zip(tmp_path / "canvas.zip", lms.canvas(right, wrong)),
-                            ["canvas_1001", "canvas_1002", "canvas_1003"]),
-                 "moodle": (make_zip(tmp_path / "moodle.zip", moodle), ["moodle_5301279"]),
-                 "blackboard": (make_zip(tmp_path / "blackboard.zip", blackboard), ["blackboard_jdoe"])}
-    seconds = {}
-    for system, (path, students) in downloads.items():
-        course = tmp_path / system
-        course.mkdir()
-        got = collect(path, [f"{n}.ipynb" for n in ("01_world_model", "02_reward", "03_imagination_actor",
-                                                      "04_imagination_gap", "05_horizon", "06_closing_the_gap")])
-        t = time.perf_counter()
-        report = grade.grade_class(path, course, timeout=TIMEOUT, jobs=2, share=False, progress=False, log=print)
-        seconds[system] = time.perf_counter() - t
-        assert sorted(report) == students == sorted(got.lms)
-        with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
-            for s in students:
-                sub = gb.find_submission_notebook("02_reward", ASSIGNMENT, s)
-                assert {g.name: g.score for g in sub.grades}["reward_impl_tests"] == 4, s
-        with open(course / "grades.csv", newline="") as f:
-            assert sorted(row["student_id"] for row in csv.DictReader(f)) == students
-        for s in students:
-            assert (course / "feedback" / s / ASSIGNMENT / "02_reward.html").is_file()
-            assert report[s]["lms"] == got.lms[s]
-        assert (course / "class_report.html").is_file()
-        with open(course / "canvas_import.csv", newline="", encoding="utf-8-sig") as f:
-            canvas_rows = list(csv.reader(f))
-        with open(course / "moodle_import.csv", newline="", encoding="utf-8-sig") as f:
-            moodle_rows = list(csv.reader(f))
-        if system == "canvas":
-            assert any("marked this submission late" in n for n in report["canvas_1002"]["notes"])
-            assert any("graded 'obrienseán_1003_40004_02_reward-1.ipynb'" in n for n in report["canvas_1003"]["notes"])
-            # the LMS's own user ids went back out, one row each under the Points Possible row
-            assert sorted(r[1] for r in canvas_rows[2:]) == ["1001", "1002", "1003"]
-        elif system == "moodle":
-            assert any("graded 'Seán OBrien_5301279_assignsubmission_file/02_reward (1).ipynb'" in n
-                       for n in report["moodle_5301279"]["notes"])
-            assert [r[0] for r in moodle_rows[1:]] == ["Participant 5301279"]
-        else:
-            # the second attempt (right) is graded, the first (wrong) set aside, both said in words
-            assert report["blackboard_jdoe"]["lms"]["ids"] == {"username": "jdoe"}
-            assert report["blackboard_jdoe"]["lms"]["submitted_at"].startswith("2026-03-02T09:30")
-    print(f"graded a Canvas download in {seconds['canvas']:.0f} s, a Moodle one in {seconds['moodle']:.0f} s "
-          f"and a Blackboard one in {seconds['blackboard']:.0f} s")

@@ -1,0 +1,58 @@
+"""What grading refuses before it touches anything: a download that names no student.
+
+Fast: the refusal comes before nbgrader, a kernel or the course's gradebook is touched. The course
+folder holds the outputs of an earlier grading; every one of them must be byte for byte the same
+after the refused run, which exits non-zero and says why.
+"""
+
+import hashlib
+import os
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+OUTPUTS = ["grades.csv", "report.csv", "canvas_import.csv", "class_report.html", "lms_export_notes.txt",
+           "gradebook.db", "feedback/canvas_1/assignment/02_reward.html"]
+
+
+def snapshot(folder: Path) -> dict:
+    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def empty_folder(tmp_path):
+    (tmp_path / "empty").mkdir()
+    return tmp_path / "empty"
+
+
+def only_system_files(tmp_path):
+    path = tmp_path / "junk.zip"
+    with zipfile.ZipFile(path, "w") as zf:
+        zf.writestr("__MACOSX/._x", b"")
+        zf.writestr(".DS_Store", b"")
+    return path
+
+
+def an_empty_zip(tmp_path):
+    path = tmp_path / "none.zip"
+    zipfile.ZipFile(path, "w").close()
+    return path
+
+
+@pytest.mark.parametrize("make", [empty_folder, only_system_files, an_empty_zip])
+def test_a_download_of_nobody_is_refused_and_changes_no_file(tmp_path, make):
+    course = tmp_path / "course"
+    for name in OUTPUTS:
+        (course / name).parent.mkdir(parents=True, exist_ok=True)
+        (course / name).write_text(f"an earlier grading's {name}\n")
+    before = snapshot(course)
+    run = subprocess.run([sys.executable, "-m", "autograde.grade", str(make(tmp_path)), "--course", str(course)],
+                         capture_output=True, text=True, cwd=ROOT, timeout=120,
+                         env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert run.returncode != 0
+    assert "holds no student's submission" in run.stderr and "no file was changed" in run.stderr
+    assert snapshot(course) == before
