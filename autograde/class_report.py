@@ -51,7 +51,6 @@ import math
 import os
 import re
 import sqlite3
-import stat
 import statistics
 import unicodedata
 from collections import Counter
@@ -59,6 +58,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from . import cellcode, checks, receipts
+from .files import read_capped
 from .course import ASSIGNMENT, EXERCISES
 
 REPORT_FILE = "class_report.html"
@@ -174,19 +174,8 @@ def gradebook_rows(course: Path, students) -> tuple[dict, list, float]:
 
 def _read_json_notebook(path: Path):
     """A notebook on disk as a dict, or None: no link followed, no more than MAX_NOTEBOOK_BYTES."""
-    try:
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0))
-    except OSError:
-        return None
-    try:
-        st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_NOTEBOOK_BYTES:
-            return None
-        with os.fdopen(fd, "rb", closefd=False) as f:
-            data = f.read(MAX_NOTEBOOK_BYTES + 1)
-    finally:
-        os.close(fd)
-    if len(data) > MAX_NOTEBOOK_BYTES:
+    data = read_capped(path, MAX_NOTEBOOK_BYTES)
+    if data is None:
         return None
     for enc in ("utf-8-sig", "utf-16", "utf-32"):
         try:

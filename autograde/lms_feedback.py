@@ -136,6 +136,7 @@ from pathlib import Path
 
 from .class_report import CSP, _t, display_name, gradebook_rows, hint_of
 from .course import ASSIGNMENT, HERE, NOTEBOOKS
+from .files import read_capped
 from .gradebook import read_manual
 from .lms_export import _ident, _lms, _num, _write_atomic, lms_settings, read_standings
 from .lms_layouts import _MOODLE_FLAT, TITLE, _canvas_splits, _word
@@ -327,19 +328,7 @@ def _safe_id(student: str) -> bool:
 
 def _read_page(path: Path) -> bytes | None:
     """A feedback page as bytes: no link followed, a regular file, at most MAX_PAGE_BYTES."""
-    try:
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0))
-    except OSError:
-        return None
-    try:
-        st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_PAGE_BYTES:
-            return None
-        with os.fdopen(fd, "rb", closefd=False) as f:
-            data = f.read(MAX_PAGE_BYTES + 1)
-    finally:
-        os.close(fd)
-    return data if len(data) <= MAX_PAGE_BYTES else None
+    return read_capped(path, MAX_PAGE_BYTES)
 
 
 def _pages(course: Path, student: str) -> dict[str, Path]:
