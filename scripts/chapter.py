@@ -459,7 +459,8 @@ def main(argv=None) -> int:
     if args.record_times:
         print(f"notebook times recorded in {record_times(out)}")
     if list((out / "metrics").glob("seed*.json")):
-        print("The same policy, two worlds (30 held-out starts per seed unless --smoke):")
+        from pusht.config import make_config
+        print(f"The same policy, two worlds ({make_config(smoke=args.smoke).eval_episodes} held-out starts per seed):")
         print(headline_table(out / "metrics"))
     print(f"\nPeak kernel memory per notebook (limit {MEMORY_LIMIT_MB:.0f} MB for Binder's 2 GB; "
           f"{out / 'memory.json'}):")

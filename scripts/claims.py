@@ -151,15 +151,26 @@ def main(argv=None) -> int:
             print(f"  {seconds[f'{name}_seed{seed}']:.0f} s", flush=True)
     os.environ.pop(LOG_ENV, None)
     rows = collect(logs)
+    # A run of some notebooks keeps the other notebooks' logs (and their times) from the run before:
+    # the table says which were run this time.
+    before = json.loads((out / "claims.json").read_text()) if (out / "claims.json").is_file() else {}
+    kept = {k: v for k, v in (before.get("seconds") or {}).items()
+            if k not in seconds and (logs / f"{k}.jsonl").is_file()}
     table = {"written_by": "scripts/claims.py (make claims)", "host": host(), "commit": commit(),
              "measured_at": datetime.now(timezone.utc).isoformat(timespec="seconds"),
              "config": "smoke" if args.smoke else "default", "seeds": args.seeds,
-             "notebooks": args.notebooks, "seconds": seconds,
-             "total_seconds": round(time.perf_counter() - t0, 1), "records": rows}
+             "notebooks": sorted({r["notebook"] for r in rows}), "run_this_time": args.notebooks,
+             "kept_from": ({"commit": before.get("commit"), "measured_at": before.get("measured_at"), "runs": sorted(kept)}
+                           if kept else None),
+             "seconds": {**kept, **seconds},
+             "total_seconds": round(sum({**kept, **seconds}.values()), 1), "records": rows}
     (out / "claims.json").write_text(json.dumps(table, indent=1) + "\n")
     md = (f"# Claims x seeds\n\nWritten by `make claims` (scripts/claims.py), {table['measured_at']}, commit "
           f"{table['commit']}, on {table['host']}; {table['config']} config, notebooks "
-          f"{', '.join(args.notebooks)}, {table['total_seconds']:.0f} s in all.\n\n"
+          f"{', '.join(table['notebooks'])}, {table['total_seconds']:.0f} s in all"
+          + (f" (run this time: {', '.join(args.notebooks)}; the others' evaluations are kept from the run of "
+             f"{table['kept_from']['measured_at']}, commit {table['kept_from']['commit']})" if kept else "")
+          + ".\n\n"
           "`true`: held on every evaluation for that seed. `alt`: a guarded claim that did not hold, so "
           "the notebook printed its alternative. `FALSE`: a fixed claim that did not hold (CI fails on "
           "it). `k/n true`: evaluated n times for that seed (per seed compared, horizon, round or fix), "

@@ -100,7 +100,8 @@ def test_the_sentences_read_the_run_they_are_given(smoke):
 def full_metrics(gap_=0.2, drift=0.15, training=0.0, motion=0.0, se=0.01, pos_share=0.4, success=0.0,
                  expert_dream=-0.05, expert_real=0.15, zero_moved=0.01, expert_gap=-0.2):
     m = {"imagination_gap": gap_, "real_success_rate": success, "imagined_return_per_step": -0.2,
-         "real_return_per_step": -0.2 - gap_, "expert_real_success_rate": 1.0}
+         "real_return_per_step": -0.2 - gap_, "expert_real_success_rate": 1.0,
+         "eval_episodes": 30}                  # drawn at 30 starts (k = 2.05), not the default's 100
     for span in gap.SPANS:
         m[f"zero_dream_block_moved_{span}"] = zero_moved
         m[f"expert_gap_{span}"], m[f"expert_gap_se_{span}"] = expert_gap, se
@@ -175,7 +176,7 @@ def test_a_term_is_only_called_positive_beyond_twice_its_noise_and_the_minimum_e
 
 
 def test_k_is_students_t_at_the_starts_degrees_of_freedom():
-    assert gap.k_se(30) == pytest.approx(2.045, abs=2e-3) and gap.K_SE == gap.k_se(30)
+    assert gap.k_se(30) == pytest.approx(2.045, abs=2e-3) and gap.K_SE == gap.k_se(100)
     assert gap.k_se(4) == pytest.approx(3.18, abs=1e-2)
     assert gap._k({"eval_episodes": 4}) == gap.k_se(4) and gap._k({}, n=4) == gap.k_se(4)
     assert "k = 2.05 standard errors over the starts (Student's t, 95% two-sided)" in gap.ex1_note(30)

@@ -164,13 +164,17 @@ def measurements(inputs: dict) -> list[tuple[float, float, float | None, float |
     return out
 
 
-def conflicts(records: list[dict], rel: float = 1e-9) -> list[str]:
+def conflicts(records: list[dict], rel: float = 1e-9, se_rel: float = 1e-3) -> list[str]:
     """Pairs of evaluations in one notebook run that judged the same number with different tests.
 
     ``records``: claim evaluations (``LEDGER`` entries, or ``make claims`` rows with ``notebook`` and
     ``seed``). Two measurements are of the same quantity when their sizes agree to ``rel`` (and are not
-    zero); they must then carry the same standard error, k and minimum effect, or one notebook would
-    say "shrank" and "did not fall" of one drop. Returns one line per conflict."""
+    zero); they must then carry the same standard error (to ``se_rel``), k and minimum effect, or one
+    notebook would say "shrank" and "did not fall" of one drop. ``se_rel``: the gap's standard error
+    comes from each start's total reward, the error size's from each start's two halves added
+    (``analysis.size_split``), which agree to float rounding (2e-4 relative seen), not to the bit;
+    a test whose standard error moves by 0.1% moves its verdict only where |t| is within 0.1% of k.
+    Returns one line per conflict."""
     seen: dict[tuple, list] = {}
     bad = []
     for r in records:
@@ -182,7 +186,7 @@ def conflicts(records: list[dict], rel: float = 1e-9) -> list[str]:
                 if label != olabel:         # named as two different quantities (or one named, one not)
                     continue
                 if abs(size - other_size) <= rel * max(size, other_size):
-                    same = (abs(se - other_se) <= rel * max(se, other_se, 1e-300)
+                    same = (abs(se - other_se) <= se_rel * max(se, other_se, 1e-300)
                             and (k is None or ok is None or abs(k - ok) <= rel * max(k, ok))
                             and (eff is None or oeff is None or eff == oeff))
                     if not same:

@@ -20,7 +20,7 @@ why they are what they are):
   test is conservative (it calls fewer changes than the paired test would; the metrics do not keep
   the per-start values that test needs). A change counts beyond ``k`` standard errors, k the
   two-sided 95% point of Student's t at eval_episodes - 1 degrees of freedom
-  (:func:`pusht.nb.stats.t_quantile`: 2.05 for 30 starts). A difference that large would turn up
+  (:func:`pusht.nb.stats.t_quantile`: 1.98 for the default 100 starts). A difference that large would turn up
   by chance, in a run that changed nothing, in about one comparison in 20 or fewer. It must also be
   at least the minimum effect that matters, ``stats.MIN_REWARD_EFFECT`` (0.02 reward per step: the
   block held the 2 cm success tolerance nearer the target on every step). A gap **shrank** when its
@@ -1502,7 +1502,8 @@ def conclusion(rounds: list, state_m: dict, delta_m: dict, ens_m: dict) -> str:
               min_effect=sc.min_effect)
     flipped = drift_crossed_zero(first=dc.first, first_se=d0se, last=dc.last,
                                  last_se=last["gap_drift_se_eval_horizon"], k=k)
-    d = ("flip" if flipped else "down" if error_size_shrank(**kw) else "up" if error_size_grew(**kw) else "same")
+    fell, rose = error_size_shrank(**kw), error_size_grew(**kw)      # both evaluated, so both are recorded
+    d = "flip" if flipped else "down" if fell else "up" if rose else "same"
     path = path_words(_series(rounds, "gap_drift_size_eval_horizon"))
     causal += (f"After round {R} that drift is {_drift_words(last, k)}. Judged by its size, as the gap is (halves "
                f"of opposite signs cancel in the signed drift), it went {sc.first:.3f} -> {sc.last:.3f}"

@@ -3,7 +3,7 @@
 Every threshold that decides a sentence here is a multiple of a standard error measured on the
 same run (``pusht.analysis``: per-start spread over the evaluation starts, or the training
 updates' own spread), never a typed-in amount. The multiple is ``k`` = :func:`k_se`, the two-sided
-95% point of Student's t at n - 1 degrees of freedom for n evaluation starts (2.05 for 30 starts),
+95% point of Student's t at n - 1 degrees of freedom for n evaluation starts (1.98 for the default 100 starts),
 as in notebooks 05 and 06; a difference is also held to the minimum effect that matters
 (:data:`~pusht.nb.stats.MIN_REWARD_EFFECT`). Each verdict has four outcomes: beyond k standard
 errors and the minimum effect (a change); beyond k standard errors but smaller than the minimum
@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..config import Config
 from ..env import SUCCESS_ANG, SUCCESS_POS, obs_to_pose
 from ..selfcheck import Question
 from . import figure
@@ -21,7 +22,7 @@ from .claims import claim, finite
 from .stats import LEVEL, MIN_REWARD_EFFECT, count_rise_p, k_for, welch
 
 # The default config's number of held-out starts (cfg.eval_episodes), for metrics that do not say.
-DEFAULT_STARTS = 30
+DEFAULT_STARTS = Config.eval_episodes
 
 
 def k_se(n: int | None = None) -> float:
@@ -36,7 +37,7 @@ def _k(m: dict | None = None, n: int | None = None) -> float:
     return k_se(n if n is not None else (m or {}).get("eval_episodes"))
 
 
-K_SE = k_se()                # for the default config's 30 starts (2.05); the functions take n
+K_SE = k_se()                # for the default config's 100 starts (1.98); the functions take n
 # 5 mm: the smallest distance difference these sentences read as a difference (a sixth of the
 # pusher's radius; the per-start spread of final distances is several centimetres).
 NEAR = 0.005
