@@ -16,7 +16,8 @@ score, and applies it with ``python -m autograde.manual_grade --from-csv``'s fun
 
 * gradebook + CSV: reading and checking the sheet, manual_grades.csv, the gradebook, grades.csv;
 * feedback pages: the one ``generate_feedback`` call for every student touched (``--jobs``, default
-  one per core), skipped with ``--no-feedback``.
+  one per core), skipped with ``--no-feedback``; then grades.csv, the import file and the feedback
+  packages made again from the report grading saved (``manual_grade.refresh_returns``), timed with it.
 
 Prints the figures; ``--csv`` also appends them to that file (bench.py's columns). The figures
 belong to this host and to how busy it is.
@@ -85,6 +86,8 @@ def build_course(course: Path, students: int, executed: Path | None) -> dict:
         gb.db.commit()
     gradebook.record(course, report, results)
     sanitize_feedback_sources(course, report)
+    from autograde.lms_feedback import write_feedback_return
+    write_feedback_return(course, report, log=lambda _: None)   # as grading leaves it: applying remakes it
     return report
 
 
@@ -159,7 +162,7 @@ def main(argv=None) -> int:
         part = total - feedback["seconds"]
         print(f"to_grade.csv written: {t_sheet:.2f} s ({filled} sentences of {args.students} students)")
         print(f"applied {filled} grades for {len(out['students'])} students:")
-        print(f"  gradebook + CSV (check, manual_grades.csv, gradebook, grades.csv): {part:.2f} s")
+        print(f"  gradebook + CSV (check, manual_grades.csv, gradebook, grades.csv, import file, packages): {part:.2f} s")
         if args.no_feedback:
             print("  feedback pages: not made (--no-feedback)")
         else:
