@@ -43,9 +43,9 @@ import nbformat
 
 from . import guarantees, intake, sandbox
 from .class_report import write_class_report
-from .course import ASSIGNMENT, COURSE_ID, HERE, NOTEBOOKS, _one_run_per_course, course_bundle, prepare_course
+from .course import ASSIGNMENT, HERE, NOTEBOOKS, _one_run_per_course, course_bundle, prepare_course
 from .feedback import generate_feedback, sanitize_feedback_sources
-from .gradebook import export, record
+from .gradebook import clear_submissions, export, record
 from .lms_export import spreadsheet_text, write_lms_exports
 from .lms_feedback import write_feedback_return
 from .prepare import prepare_student
@@ -78,7 +78,6 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
     guarantees hold here (``guarantees.of_run``: logged, then the first rows of ``report.csv`` and
     the first section of the class report).
     """
-    from nbgrader.api import Gradebook
     from tqdm.auto import tqdm
 
     course = course.resolve()
@@ -178,15 +177,7 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
         run_tasks(tasks, jobs, scheduler, submit_args, on_done, log)
     state = {s: {"fingerprint": prints[s], "results": results[s]} for s in students if s in results}
     state_path.write_text(json.dumps(state, indent=1, sort_keys=True))
-    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
-        for s in report:                 # grades.csv's last_name: the whole name as the LMS wrote it
-            name = report[s].get("name")
-            gb.update_or_create_student(s, last_name=spreadsheet_text(name) if name else None)
-            try:
-                gb.remove_submission(ASSIGNMENT, s)
-            except Exception:
-                pass
-        gb.db.commit()
+    clear_submissions(course, report)
     phases = {}
     t = time.perf_counter()
     record(course, report, results)

@@ -108,6 +108,25 @@ def record(course: Path, report: dict, results: dict) -> None:
             gb.db.commit()
 
 
+def clear_submissions(course: Path, report: dict) -> None:
+    """Every student of ``report`` in the gradebook, with their name (``report[s]["name"]``: grades.csv's
+    last_name, the whole name as the LMS wrote it, fit for a spreadsheet) and no submission, so that
+    :func:`record` writes each afresh."""
+    from nbgrader.api import Gradebook
+
+    from .lms_export import spreadsheet_text
+
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
+        for s, rep in report.items():
+            name = (rep or {}).get("name")
+            gb.update_or_create_student(s, last_name=spreadsheet_text(name) if name else None)
+            try:
+                gb.remove_submission(ASSIGNMENT, s)
+            except Exception:            # nbgrader's MissingEntry, or a half-made row: nothing to remove
+                pass
+        gb.db.commit()
+
+
 def read_manual(course: Path) -> dict:
     manual = {}
     if (course / "manual_grades.csv").exists():

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import io
 import re
-import shutil
 import zipfile
 from html.parser import HTMLParser
 
@@ -27,33 +26,17 @@ import pytest
 
 from autograde import checks, lms_feedback
 from autograde.class_report import CSP
-from autograde.course import ASSIGNMENT, tool_env
+from autograde.course import ASSIGNMENT
 from autograde.lms_feedback import (BLACKBOARD_DIR, BLACKBOARD_ZIP, CANVAS_ZIP, GENERIC_ZIP, MOODLE_ZIP, README,
                                     RETURN_DIR, write_feedback_return)
 from browser_support import chromium
-from test_lms_export import canvas_id, grade, make_template, moodle_id
+from test_lms_export import canvas_id, course, grade, moodle_id, template  # noqa: F401 (fixtures)
 
 HOSTILE = '<script>alert("x")</script><img src=x onerror=alert(1)>'
 NAMES = {"ann": "Ann Lee", "bob": "O'Brien, Bob \"Bobby\"", "zoe": "Zoë_Ångström", "eve": "=HYPERLINK(\"x\")"}
 PLUGINS = {("assignsubmission", "file"), ("assignfeedback", "file")}   # the plugins of the assignment
 
 
-@pytest.fixture(scope="module")
-def template(tmp_path_factory):
-    from nbgrader.api import Gradebook
-
-    path = tmp_path_factory.mktemp("template") / "gradebook.db"
-    with pytest.MonkeyPatch.context() as mp:      # a new gradebook runs the venv's `alembic`
-        mp.setenv("PATH", tool_env()["PATH"])
-        make_template(Gradebook, path)
-    return path
-
-
-@pytest.fixture
-def course(template, tmp_path):
-    (tmp_path / "course").mkdir()
-    shutil.copy(template, tmp_path / "course" / "gradebook.db")
-    return tmp_path / "course"
 
 
 def pages_for(course, students, notebooks=("02_reward", "04_imagination_gap")) -> dict:

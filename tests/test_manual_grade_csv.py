@@ -12,10 +12,10 @@ gradebook, manual_grades.csv and grades.csv are the real ones.
 
 import csv
 import io
-import shutil
 
 import nbformat
 import pytest
+from test_lms_export import course  # noqa: F401 (the fixture: a copy of this module's template)
 
 from autograde import gradebook, manual_grade
 from autograde.course import ASSIGNMENT, COURSE_ID, tool_env
@@ -46,11 +46,6 @@ def template(tmp_path_factory):
     return path
 
 
-@pytest.fixture
-def course(template, tmp_path):
-    (tmp_path / "course").mkdir()
-    shutil.copy(template, tmp_path / "course" / "gradebook.db")
-    return tmp_path / "course"
 
 
 @pytest.fixture
@@ -83,8 +78,6 @@ def grade(course, students: dict) -> dict:
     """Record hand-ins as grade_class does. ``students``: {id: (lms identity or None, {notebook:
     answer})}: an answer None is left as released (nbgrader's 0, "no response"); a notebook absent
     was not handed in."""
-    from nbgrader.api import Gradebook
-
     report, results = {}, {}
     for s, (lms, answers) in students.items():
         report[s] = {"notes": [], "completion": {}, "verdicts": {}, "failed": {}, "delegated": {}, "lms": lms}
@@ -98,14 +91,7 @@ def grade(course, students: dict) -> dict:
                 verdicts = {"dream_impl_tests": {"passed": True, "message": "all cases agree"}}
             results[s][f"{nb}.ipynb"] = {"ok": True, "scores": scores, "verdicts": verdicts}
             autograded(course, s, nb, answer if answer is not None else "YOUR ANSWER HERE")
-    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
-        for s in report:
-            gb.update_or_create_student(s)
-            try:
-                gb.remove_submission(ASSIGNMENT, s)
-            except Exception:
-                pass
-        gb.db.commit()
+    gradebook.clear_submissions(course, report)          # as grade_class does
     gradebook.record(course, report, results)
     return report
 
