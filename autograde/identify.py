@@ -44,15 +44,22 @@ class Match:
     def words(self) -> str:
         """How the verdict was reached, for a note the student and the instructor read."""
         if self.notebook:
-            return f"it holds {self.share:.0%} of {self.notebook}'s cells"
+            return f"it holds {self.share:.0%} of {self.notebook}'s own cells (by their ids or their texts)"
         if self.runner_up and self.share >= MIN_SHARE:
-            return (f"it holds {self.share:.0%} of one notebook's cells and {self.runner_up_share:.0%} of "
+            return (f"it holds {self.share:.0%} of one notebook's own cells and {self.runner_up_share:.0%} of "
                     f"{self.runner_up}'s: too close to tell")
-        return f"it holds at most {self.share:.0%} of any notebook's cells (at least {MIN_SHARE:.0%} are needed)"
+        return (f"it holds at most {self.share:.0%} of any notebook's own cells (by their ids or their texts; "
+                f"at least {MIN_SHARE:.0%} are needed)")
+
+
+def _text(source) -> str:
+    if isinstance(source, list):
+        return "".join(x for x in source if isinstance(x, str))
+    return source if isinstance(source, str) else ""
 
 
 def _text_key(source) -> str | None:
-    text = " ".join(("".join(source) if isinstance(source, list) else str(source or "")).split())
+    text = " ".join(_text(source).split())
     if len(text) < MIN_TEXT:
         return None
     return hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()
@@ -80,6 +87,12 @@ def marks(nb, *, release: bool = False) -> set[tuple[str, str]]:
     return out
 
 
+def _answer_cell(cell) -> bool:
+    meta = cell.get("metadata") if isinstance(cell, dict) and isinstance(cell.get("metadata"), dict) else {}
+    grading = meta.get("nbgrader") if isinstance(meta.get("nbgrader"), dict) else {}
+    return bool(grading.get("solution")) and isinstance(grading.get("grade_id"), str)
+
+
 class Identifier:
     """Built once from the release (``{file name: notebook}``); :meth:`identify` judges uploads."""
 
@@ -90,6 +103,9 @@ class Identifier:
             for mark in m:
                 seen[mark] = seen.get(mark, 0) + 1
         self.marks = {name: {m for m in ms if seen[m] == 1} for name, ms in own.items()}
+        # each notebook's answer cells as released: a hand-in whose answers are all these is unworked
+        self.blanks = {name: {c["metadata"]["nbgrader"]["grade_id"]: " ".join(_text(c.get("source")).split())
+                              for c in nb.get("cells", []) if _answer_cell(c)} for name, nb in release.items()}
         empty = [name for name, ms in self.marks.items() if not ms]
         if empty:
             raise ValueError(f"release notebooks with no mark of their own, which no upload could be "
@@ -103,6 +119,15 @@ class Identifier:
             if mine:
                 best = max(best, len(mine & got) / len(mine))
         return best
+
+    def unworked(self, nb, name: str) -> bool:
+        """Whether ``nb``'s answer cells (nbgrader solution cells, by grade id) are all as ``name``
+        was released: a copy of the hand-out, not the student's work. False when it holds none."""
+        blanks = self.blanks.get(name) or {}
+        found = {c["metadata"]["nbgrader"]["grade_id"]: " ".join(_text(c.get("source")).split())
+                 for c in (nb.get("cells") if isinstance(nb.get("cells"), list) else []) if _answer_cell(c)}
+        shared = [g for g in found if g in blanks]
+        return bool(shared) and all(found[g] == blanks[g] for g in shared)
 
     def identify(self, nb) -> Match:
         got = marks(nb)

@@ -91,6 +91,7 @@ MB = 2 ** 20
 MAX_NOTEBOOK_BYTES = 50 * MB     # a chapter notebook with outputs is < 5 MB; 50 MB is surely wrong
 MAX_TOTAL_BYTES = 2048 * MB      # everything read from one class download, all students together
 MAX_MEMBERS = 100_000            # entries in the archive (or files in the folder) looked at
+MAX_FILES_PER_NOTEBOOK = 4      # uploads of one notebook read per student when notebooks are known by content
 MAX_ID_CHARS = 64                # nbgrader's gradebook holds 128; folders hold 255 bytes
 MAX_ID_BYTES = 200
 REDOWNLOAD = ("Open the notebook in Jupyter or Colab, use File > Download > Download .ipynb, and "
@@ -280,7 +281,7 @@ class _Names:
         self.canonical = {n[:-len(".ipynb")].casefold(): n for n in notebooks}
         stems = sorted((n[:-len(".ipynb")] for n in notebooks), key=len, reverse=True)
         alts = "|".join(re.escape(s) for s in stems)
-        self.re = re.compile(rf"^(?:(?P<prefix>.+?)_)??(?:copy of\s*)?(?P<nb>{alts}){_SUFFIX}\.ipynb$",
+        self.re = re.compile(rf"^(?:(?P<prefix>.+?)_)??(?:copy of\s*)*(?P<nb>{alts}){_SUFFIX}\.ipynb$",
                              re.IGNORECASE)
         # Only to say whose file it was when the notebook part matches nothing.
         self.loose = re.compile(r"^(?P<prefix>.+?)_(?P<nb>\d\d_.*)$")
@@ -432,6 +433,7 @@ class _Candidate:
     data: bytes | None = None      # read ahead to identify it by content (``_identify``)
     error: str = ""                # why it could not be read, when read ahead
     renamed: str = ""              # why its content, not its name, decided its notebook (said if graded)
+    blank: bool = False            # its answers are all as released: a copy of the hand-out, not the work
 
     def newness(self) -> tuple:
         """Larger is newer: the LMS's own order first (Canvas's file id, Blackboard's attempt
@@ -475,7 +477,12 @@ def collect(submissions: Path, notebooks: list[str], *, release: dict | None = N
       ``05_horizon_final.ipynb`` is graded as 05_horizon, a file named 04 that holds 05 as 05. Its
       name decides only where its content does not (a notebook too damaged to tell); a file that
       neither its name nor its content places, and two files that are one notebook by content
-      under different names (the newest is graded), go to ``Intake.human`` and the student's notes.
+      under different names (the newest is graded, but the student's work before a newer copy of
+      the hand-out with no answer in it), go to ``Intake.human`` and the student's notes. A flat
+      name whose student part cannot be read (``s042_my horizon.ipynb``) is the longest known
+      student id's it starts with. A student's files are read newest first, at most
+      ``MAX_FILES_PER_NOTEBOOK`` uploads of each notebook, so that no hand-in spends the class's
+      byte limit.
     """
     submissions = Path(submissions)
     names = _Names(notebooks)
@@ -543,6 +550,7 @@ def _collect(entries: list[_Entry], names: _Names, intake: Intake,
 
     # 3. who and which notebook
     candidates: list[_Candidate] = []
+    orphans: list[tuple[int, _Entry]] = []      # flat names with no readable student part (content known)
     for order, e in enumerate(usable):
         parts, base = e.parts, e.parts[-1]
         if len(parts) > 2:
@@ -566,6 +574,9 @@ def _collect(entries: list[_Entry], names: _Names, intake: Intake,
         parsed = names.parse(base)
         if parsed is None and names.identifier is not None and (folder or names.loose_prefix(base)):
             parsed = (None if folder else names.loose_prefix(base), None, 0)     # its content will tell
+        if parsed is None and names.identifier is not None and folder is None:
+            orphans.append((order, e))        # whose, once every student is known (below)
+            continue
         if parsed is None:
             who = folder or names.loose_prefix(base)
             if folder is None and who is None:
@@ -609,6 +620,18 @@ def _collect(entries: list[_Entry], names: _Names, intake: Intake,
         known.add(original)
         candidates.append(_Candidate(e, original, notebook, counter, order, by_name=notebook))
 
+    # 3b. a flat name whose student part could not be read (``s042_Copy of Copy of 05_horizon.ipynb``,
+    # ``ann_horizon.ipynb``) is the longest known student's whose id, and "_", it starts with; its
+    # content tells which notebook. A name that starts with no known id is graded for nobody.
+    for order, e in orphans:
+        base = e.parts[-1]
+        who = max((k for k in known if base.casefold().startswith(k.casefold() + "_")), key=len, default=None)
+        if who is None or e.size > max_member_bytes:
+            rejected.append(f"{e.member!r}: refused: the name is not <student>_<notebook>.ipynb with a notebook of "
+                            f"this assignment ({names.expected}), and it starts with no student's id")
+            continue
+        candidates.append(_Candidate(e, who, None, 0, order, by_name=None))
+
     # 4. one folder-safe id per student as written; collisions are told, never merged
     ids = _assign_ids(known, intake)
     # 5. what each file is, by its content; then the newest readable upload of each notebook
@@ -625,20 +648,33 @@ def _identify(candidates: list[_Candidate], ids: dict[str, str], names: _Names, 
     if names.identifier is None:
         return candidates, total
     kept = []
-    for c in candidates:
+    # One student's files are read newest first, within a budget of their own: as many files, and as
+    # many bytes, as MAX_FILES_PER_NOTEBOOK uploads of each notebook, so that no hand-in can spend the
+    # class's byte limit (which, read ahead, would leave later students' notebooks unread).
+    per_files = MAX_FILES_PER_NOTEBOOK * len(names.canonical)
+    per_bytes = per_files * max_member_bytes // MAX_FILES_PER_NOTEBOOK
+    spent: dict[str, list[int]] = {}
+    order = {id(c): i for i, c in enumerate(candidates)}
+    for c in sorted(candidates, key=lambda c: (ids[c.original], c.newness()), reverse=True):
         base, sid = _base(c), ids[c.original]
-        if total + c.entry.size > max_total_bytes:
+        files, used = spent.setdefault(sid, [0, 0])
+        if files >= per_files or used + c.entry.size > per_bytes:
+            c.error = (f"this hand-in has more files than {MAX_FILES_PER_NOTEBOOK} uploads of each notebook "
+                       f"({per_files} files, {_size(per_bytes)}): only the newest were read")
+        elif total + c.entry.size > max_total_bytes:
             c.error = f"the class download passed the {_size(max_total_bytes)} limit for all files together"
         else:
+            spent[sid] = [files + 1, used + c.entry.size]
             try:
                 c.data = c.entry.read(min(max_member_bytes, max_total_bytes - total))
                 total += len(c.data)
             except _Refused as why:
                 c.error = str(why)
-        match = None
+        match, nb = None, None
         if c.data is not None:
             try:
-                match = names.identifier.identify(decode_notebook(c.data, max_member_bytes))
+                nb = decode_notebook(c.data, max_member_bytes)
+                match = names.identifier.identify(nb)
             except ValueError:
                 pass                          # prepare tells the student why it cannot be read
         if match is not None and match.notebook and match.notebook != c.by_name:
@@ -663,13 +699,16 @@ def _identify(candidates: list[_Candidate], ids: dict[str, str], names: _Names, 
                 f"are {names.expected}. Upload the notebook you worked in, as it was released")
             intake.human.append({"student": sid, "file": base, "graded": None, "why": why})
             continue
-        elif match is not None and not match.notebook and match.runner_up is None:
+        elif match is not None and not match.notebook:      # its content places it nowhere, or two places
             why = f"its name says {c.by_name}, but {match.words()}"
             intake.notes.setdefault(sid, []).append(f"{base}: graded as {c.by_name} by its name only: {why}; "
                                                     f"if this is not the notebook you worked in, upload that one")
             intake.human.append({"student": sid, "file": base, "graded": c.by_name,
                                  "why": why + ": check it is the notebook the student meant"})
+        if nb is not None and c.notebook:
+            c.blank = names.identifier.unworked(nb, c.notebook)
         kept.append(c)
+    kept.sort(key=lambda c: order[id(c)])
     return kept, total
 
 
@@ -684,7 +723,8 @@ def _pick_newest(candidates: list[_Candidate], ids: dict[str, str], intake: Inta
         groups.setdefault((ids[c.original], c.notebook), []).append(c)
     chosen = {}
     for (sid, notebook), group in sorted(groups.items()):
-        group.sort(key=_Candidate.newness, reverse=True)
+        # the student's work before a copy of the hand-out (``blank``), then the newest
+        group.sort(key=lambda c: (not c.blank, c.newness()), reverse=True)
         graded, failed = None, []
         for c in group:
             if c.data is not None or c.error:        # read ahead by _identify
@@ -718,6 +758,10 @@ def _pick_newest(candidates: list[_Candidate], ids: dict[str, str], intake: Inta
         ignored = group[group.index(c) + 1:]     # older than the graded one
         if len(group) > 1:
             newest = "the newest" if c.lms is None else _NEWEST[c.lms.system]
+            blanks = [x for x in group if x.blank and x is not c]
+            if not c.blank and any(x.newness() > c.newness() for x in blanks):
+                newest = ("the newest that holds answers; " + ", ".join(x.short() for x in blanks)
+                          + " holds the notebook as handed out, with no answer in it")
             line = f"{notebook}: {len(group)} uploads; graded {c.short()}, {newest}"
             if failed:
                 line += " that could be read; " + "; ".join(failed)
@@ -726,8 +770,8 @@ def _pick_newest(candidates: list[_Candidate], ids: dict[str, str], intake: Inta
             notes.append(line)
             if len({_stem(x) for x in group}) > 1:   # differently named files, one notebook by content
                 intake.human.append({"student": sid, "file": ", ".join(_base(x) for x in group), "graded": notebook,
-                                     "why": f"{len(group)} files are {notebook} by their content; the newest, "
-                                            f"{_base(c)}, was graded: check it is the one the student meant"})
+                                     "why": f"{len(group)} files are {notebook} by their content; {_base(c)} was "
+                                            f"graded ({newest}): check it is the one the student meant"})
     return chosen
 
 

@@ -232,8 +232,8 @@ def _summary(student: str, rep: dict, standing, total, cells: list, manual: dict
     # files whose names did not say what they are (intake.Intake.human): said first, not buried in the notes
     files = [h for h in rep.get("human") or () if isinstance(h, dict)]
     if files:
-        out.append('<h2>Your files</h2><p>Some of your files were not named as the notebooks are. Each was '
-                   'read for what it holds:</p><ul class="files">' + "".join(
+        out.append('<h2>Your files</h2><p>Files whose names did not settle which notebook they are, and what '
+                   'became of each (every file is read for what it holds):</p><ul class="files">' + "".join(
                        f"<li><code>{_t(h.get('file'), 300)}</code>: "
                        + (f"graded as <code>{_t(h['graded'])}</code>" if h.get("graded") else "<strong>not graded</strong>")
                        + f" ({_t(h.get('why'), 600)})</li>" for h in files) + "</ul>")

@@ -211,6 +211,10 @@ def _canvas_splits(base: str, anonymous: bool) -> list[dict]:
         if not name or len(name) > limit:
             continue
         r = _CANVAS_IDS.match(base, i + 1)
+        # database ids never start with 0: "leeann_1001_40001_01_world_model_final.ipynb" is user 1001's
+        # file 40001, not user 40001's file "01"
+        if r and (r["uid"].startswith("0") or (r["aid"] or "1").startswith("0")):
+            continue
         if r:
             out.append({"name": name, "uid": r["uid"], "aid": r["aid"], "made": r["made"],
                         "display": base[r.end():] if r["aid"] else None, "late": late, "marker": marker})
@@ -470,8 +474,12 @@ def _canvas_vouched(parts: list[list[str]], looks: list[set[str]], parse_noteboo
     """Members named ``<name>_<user id>_<file id>_<file>`` whose own file part names no notebook (a
     student's renaming, ``05_horizon_final.ipynb``, which intake identifies by its content) that
     follow Canvas's naming all the same: those whose (user id, name) reading is also the reading of
-    a member that follows it in full. The student's other files vouch for the reading; a generic
-    ``s1_2_02_reward.ipynb`` has no such voucher, so it stays what ``looks_like`` says."""
+    a member that follows it in full (the student's other files vouch for the reading), and those
+    that have Canvas's full shape with a file id while their whole name reads as no generic
+    ``<student>_<notebook>.ipynb`` (a student who renamed every file, or one who uploaded only
+    files of their own, cannot turn the class's download into a generic one). A generic
+    ``s1_2_02_reward.ipynb`` reads as student ``s1_2``'s notebook 02 and has no voucher, so it stays
+    what ``looks_like`` says."""
     def readings(base, strict):
         out = set()
         for anonymous in (False, True):
@@ -484,9 +492,13 @@ def _canvas_vouched(parts: list[list[str]], looks: list[set[str]], parse_noteboo
     for p, one in zip(parts, looks):
         if "canvas" in one:
             vouchers |= readings(p[0], strict=True)
+    def shaped(base):        # <name>_<user id>_<file id>_<file>, whose whole name reads as no <student>_<notebook>
+        return parse_notebook(base) is None and any(
+            x["aid"] for anonymous in (False, True) for x in _canvas_splits(base, anonymous))
+
     return [i for i, (p, one) in enumerate(zip(parts, looks))
-            if vouchers and "canvas" not in one and len(p) == 1 and _CANVAS_LOOSE.match(p[0])
-            and readings(p[0], strict=False) & vouchers]
+            if "canvas" not in one and len(p) == 1 and _CANVAS_LOOSE.match(p[0])
+            and ((vouchers and readings(p[0], strict=False) & vouchers) or shaped(p[0]))]
 
 
 def detect(members: list[list[str]], parse_notebook: NotebookParser) -> tuple[str | None, bool, str]:

@@ -17,7 +17,7 @@ import pytest
 
 from autograde.classes import lms
 from autograde.identify import MIN_SHARE, Identifier
-from autograde.intake import collect
+from autograde.intake import _Names, collect
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted(p.name for p in (ROOT / "notebooks").glob("*.ipynb"))
@@ -81,8 +81,9 @@ def test_any_renaming_is_graded_as_what_it_is(tmp_path, seed):
     for n, name in expect.items():
         assert got.students["s1"][n].member.endswith(name)
     renamed = {h["file"] for h in got.human if h["graded"]}
+    named = _Names(NOTEBOOKS)
     for n, name in expect.items():
-        if name != n:
+        if named.parse(name) is None:           # its name says no notebook: its content did
             assert name in renamed and any(line.startswith(f"{name}: graded as {n}") for line in got.notes["s1"])
 
 
@@ -140,3 +141,66 @@ def test_renamed_in_each_lms_download(tmp_path, system):
 def test_without_the_release_names_alone_decide_as_before(tmp_path):
     got = collect(zipped(tmp_path, {"s1_05_horizon_final.ipynb": worked("05_horizon.ipynb")}), NOTEBOOKS)
     assert not got.students.get("s1") and got.human == [] and "no notebook" in got.rejected[0]
+
+
+# --- found by a red team (issue 39): each case failed before its fix ---------------------------------
+def released(name: str) -> bytes:
+    return nbformat.writes(nbformat.from_dict(RELEASE[name])).encode("utf-8")
+
+
+def test_one_students_many_files_cannot_spend_the_class_limit(tmp_path):
+    """Read ahead, every file counts against the class's byte limit: one hand-in of 40 copies may
+    not leave a later student unread. A student's files are read newest first, at most
+    MAX_FILES_PER_NOTEBOOK uploads of each notebook; the rest are said, not silently dropped."""
+    from autograde.intake import MAX_FILES_PER_NOTEBOOK
+
+    copy = worked("05_horizon.ipynb")
+    members = {f"aaa/05_horizon ({i}).ipynb": copy for i in range(1, 41)}
+    members.update({"zzz/02_reward.ipynb": worked("02_reward.ipynb"), "zzz/05_horizon.ipynb": copy})
+    limit = (MAX_FILES_PER_NOTEBOOK * len(NOTEBOOKS) + 3) * len(copy)
+    got = collect(zipped(tmp_path, members), NOTEBOOKS, release=RELEASE, max_total_bytes=limit)
+    assert set(got.students["zzz"]) == {"02_reward.ipynb", "05_horizon.ipynb"}, got.notes["zzz"]
+    assert got.students["aaa"]["05_horizon.ipynb"].member == "aaa/05_horizon (40).ipynb"
+    assert any("ignored the older" in n and "05_horizon (1).ipynb" in n for n in got.notes["aaa"])   # said, not dropped
+
+
+def test_a_canvas_download_whose_files_are_all_renamed_is_still_canvas(tmp_path):
+    files = {"05_horizon_final.ipynb": worked("05_horizon.ipynb"), "my 04.ipynb": worked("04_imagination_gap.ipynb")}
+    got = collect(zipped(tmp_path, lms.canvas(files)), NOTEBOOKS, release=RELEASE)
+    assert sorted(got.students) == ["canvas_1001", "canvas_1002", "canvas_1003"] and len(got.lms) == 3
+    assert all(set(u) == {"04_imagination_gap.ipynb", "05_horizon.ipynb"} for u in got.students.values())
+    assert not [r for r in got.rejected if "refused" in r]
+
+
+def test_the_work_is_graded_before_a_newer_copy_of_the_hand_out(tmp_path):
+    path = tmp_path / "download.zip"
+    with zipfile.ZipFile(path, "w") as zf:
+        zf.writestr(zipfile.ZipInfo("bob/05_horizon.ipynb", date_time=(2026, 3, 5, 16, 0, 0)), worked("05_horizon.ipynb"))
+        zf.writestr(zipfile.ZipInfo("bob/05_horizon_original.ipynb", date_time=(2026, 3, 6, 9, 0, 0)),
+                    released("05_horizon.ipynb"))
+    got = collect(path, NOTEBOOKS, release=RELEASE)
+    assert got.students["bob"]["05_horizon.ipynb"].member == "bob/05_horizon.ipynb"
+    assert any("holds the notebook as handed out" in n for n in got.notes["bob"])
+    assert [h["graded"] for h in got.human] == ["05_horizon.ipynb"]
+
+
+def test_flat_names_whose_student_part_is_unreadable_find_their_student(tmp_path):
+    members = {"s042_Copy of Copy of 05_horizon.ipynb": worked("05_horizon.ipynb"),
+               "s042_04_imagination_gap.ipynb": worked("04_imagination_gap.ipynb"),
+               "ann_horizon.ipynb": worked("05_horizon.ipynb"), "ann_04_imagination_gap.ipynb": worked("04_imagination_gap.ipynb"),
+               "nobody here.ipynb": worked("02_reward.ipynb")}
+    got = collect(zipped(tmp_path, members), NOTEBOOKS, release=RELEASE)
+    assert set(got.students["s042"]) == set(got.students["ann"]) == {"04_imagination_gap.ipynb", "05_horizon.ipynb"}
+    assert any(n.startswith("ann_horizon.ipynb: graded as 05_horizon.ipynb") for n in got.notes["ann"])
+    assert any("nobody here.ipynb" in r and "no student" in r for r in got.rejected)
+
+
+def test_a_name_whose_content_is_too_close_to_tell_is_said(tmp_path):
+    mixed = nbformat.from_dict(WORKED["05_horizon.ipynb"])
+    mixed.cells = WORKED["04_imagination_gap.ipynb"].cells[:25] + WORKED["05_horizon.ipynb"].cells[:20]
+    got = collect(zipped(tmp_path, {"eve/04_imagination_gap.ipynb": nbformat.writes(mixed).encode()}), NOTEBOOKS,
+                  release=RELEASE)
+    assert list(got.students["eve"]) == ["04_imagination_gap.ipynb"]          # by its name, and said
+    [h] = got.human
+    assert h["graded"] == "04_imagination_gap.ipynb" and "too close to tell" in h["why"]
+    assert any("by its name only" in n for n in got.notes["eve"])
