@@ -154,6 +154,7 @@ PACKAGES = {"canvas": CANVAS_ZIP, "moodle": MOODLE_ZIP, "blackboard": BLACKBOARD
 MAX_PAGE_BYTES = 32 << 20            # a feedback page read from disk, at most (pages are capped far below)
 INSTRUCTOR_ONLY = "for the instructor"
 MOODLE_PLUGIN = "assignsubmission_file"
+NAME_CHARS = 60                      # of a student's name in a member name (the ids decide, the name only reads)
 MOODLE_DROPPED = "&<>\"`|':\\/"   # what Moodle's clean_param(PARAM_FILE) removes from a file name
 
 
@@ -398,6 +399,7 @@ def canvas_name_part(name) -> str:
     """The name part of a Canvas re-upload file name: word characters only, no ``_`` (the ids are
     found as the first all-digit ``_`` parts), never empty, never all digits."""
     text = "".join(c for c in unicodedata.normalize("NFC", str(name or "")).lower() if _word(c) and c != "_")
+    text = text[:NAME_CHARS]           # a member name stays far below the 255 bytes a file name may hold
     return text if text and not text.isdigit() else "student"
 
 
@@ -433,7 +435,7 @@ def moodle_full_name(name) -> str:
     removed, control characters made spaces, no leading ``.``/``~`` (Moodle skips such files)."""
     text = unicodedata.normalize("NFC", str(name or "")).replace("_", " ")
     text = "".join(" " if unicodedata.category(c)[0] == "C" else "" if c in MOODLE_DROPPED else c for c in text)
-    text = " ".join(text.split()).lstrip(".~ ")
+    text = " ".join(text.split()).lstrip(".~ ")[:NAME_CHARS].rstrip()
     return text or "Participant"
 
 

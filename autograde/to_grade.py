@@ -32,6 +32,7 @@ instead: no byte-order mark, Windows-1252, ``;`` or tab as separator, a decimal 
 
 from __future__ import annotations
 
+import codecs
 import csv
 import io
 from pathlib import Path
@@ -198,10 +199,17 @@ def read_sheet(path: Path) -> tuple[list[tuple[int, dict]], list[str]]:
         return [], [f"{path}: cannot be read ({e.strerror or e})"]
     if len(data) > SHEET_BYTES:
         return [], [f"{path}: more than {SHEET_BYTES >> 20} MB: not a grading sheet"]
-    try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError:         # Excel's "CSV (comma delimited)" is the system code page
-        text = data.decode("cp1252", errors="replace")
+    legacy = False
+    if data.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):   # Excel's "Unicode Text": UTF-16, tabs
+        text = data.decode("utf-16")
+    else:
+        try:
+            text = data.decode("utf-8-sig")
+        except UnicodeDecodeError:     # Excel's "CSV (comma delimited)" is the system code page
+            text, legacy = data.decode("cp1252", errors="replace"), True
+    if legacy and "\ufffd" in text:   # not Windows-1252 either (MacRoman, say): comments would be garbled
+        return [], [f"{path}: neither UTF-8 nor Windows-1252: save it again as 'CSV UTF-8' (Excel: File > Save "
+                    f"As > CSV UTF-8) so that comments reach students as written"]
     first = text.split("\n", 1)[0]
     delimiter = max((",", ";", "\t"), key=first.count)
     reader = csv.reader(io.StringIO(text, newline=""), delimiter=delimiter)

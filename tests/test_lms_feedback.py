@@ -404,3 +404,17 @@ def test_no_student_changes_nothing_and_a_refused_manual_grade_is_not_shown(cour
     words = Page(members(out / CANVAS_ZIP)["ann_1_91_summary.html"]).words
     assert "ex1_sentence: not graded yet" in words and "7 of" not in words and "Clear." in words
     assert "Total: 8 of 9 points" in words and "out of 90: 80 of 90" in words
+
+
+def test_a_very_long_name_makes_member_names_a_file_system_can_hold(course):
+    """A name of thousands of characters (a red team's) still gives each zip member a name of at most
+    255 bytes, as most file systems hold, and the ids still reach the student."""
+    long = "Zoë " * 1500
+    report = grade(course, {"ann": (canvas_id(7, long), "blank"), "zoe": (moodle_id("48212", long), "blank")})
+    pages_for(course, ["ann", "zoe"])
+    write_feedback_return(course, report, log=lambda _: None)
+    for zip_name in (CANVAS_ZIP, MOODLE_ZIP):
+        names = members(course / RETURN_DIR / zip_name)
+        assert names and all(len(n.rsplit("/", 1)[-1].encode()) <= 255 for n in names), zip_name
+    assert {canvas_infer(n)[0] for n in members(course / RETURN_DIR / CANVAS_ZIP)} == {"7"}
+    assert {moodle_import(n, {"48212"})[0] for n in members(course / RETURN_DIR / MOODLE_ZIP)} == {"48212"}

@@ -330,3 +330,18 @@ def cell_score_only(course, student, notebook, grade_id):
 
     with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
         return gb.find_grade(grade_id, notebook, ASSIGNMENT, student).manual_score
+
+
+def test_a_sheet_saved_as_unicode_text_or_in_an_unknown_code_page(tmp_path):
+    """Excel's "Unicode Text" (UTF-16 with tabs) is read; a file in neither UTF-8 nor Windows-1252
+    (MacRoman's bytes 0x81 and 0x8d are unassigned there) is refused with what to do, not garbled."""
+    from autograde.to_grade import read_sheet
+
+    rows = "\t".join(COLUMNS) + "\r\n" + "\t".join("s001" if c == "student_id" else "Zoë" if c == "comment"
+                                                  else "" for c in COLUMNS) + "\r\n"
+    (tmp_path / "u16.txt").write_bytes(rows.encode("utf-16"))
+    got, problems = read_sheet(tmp_path / "u16.txt")
+    assert problems == [] and got[0][1]["student_id"] == "s001" and got[0][1]["comment"] == "Zoë"
+    (tmp_path / "mac.csv").write_bytes((",".join(COLUMNS) + "\n").encode() + b"s001" + b"," * (len(COLUMNS) - 2) + b"\x81\x8d\n")
+    got, problems = read_sheet(tmp_path / "mac.csv")
+    assert got == [] and "CSV UTF-8" in problems[0]
