@@ -190,7 +190,7 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
         times = [r["seconds"] for r in results.get(s, {}).values() if isinstance(r, dict) and "seconds" in r]
         report[s]["seconds"] = round(sum(times), 2) if times else None
     export(course, report, got.rejected, held)
-    write_to_grade(course, report)       # the answers a person grades, one row each (manual_grade --from-csv)
+    write_to_grade(course, report, log=log)   # the answers a person grades, one row each (manual_grade --from-csv)
     phases["grades.csv, report.csv, to_grade.csv"], t = time.perf_counter() - t, time.perf_counter()
     write_lms_exports(course, report, log=log)
     phases["LMS import files"], t = time.perf_counter() - t, time.perf_counter()

@@ -35,6 +35,7 @@ from __future__ import annotations
 import codecs
 import csv
 import io
+import time
 from pathlib import Path
 
 import yaml
@@ -61,20 +62,50 @@ def mark_scheme() -> dict:
     return data if isinstance(data, dict) else {}
 
 
-def write_to_grade(course: Path, report: dict) -> Path:
+def write_to_grade(course: Path, report: dict, log=print) -> Path:
     """Write ``<course>/to_grade.csv`` for ``report``'s students (grade_class's per-student dict;
     ``report[s]["lms"]`` gives the display name, ``report[s]["undecided"]`` the tripwires) from
     the course's gradebook and autograded notebooks; returns its path. Always written, with its
-    header, even with nothing to grade."""
+    header, even with nothing to grade. A sheet already there that holds scores not yet applied (an
+    instructor filled it in place, then graded again) is never overwritten: it is kept beside it as
+    ``to_grade.unapplied-<time>.csv``, and ``log`` says how to apply it."""
     from .gradebook import read_manual
 
     course = Path(course)
     scheme, manual = mark_scheme(), read_manual(course)
+    keep_unapplied(course / TO_GRADE_FILE, manual, log)
     rows = [_row(report, course, scheme, manual, *item) for item in _cells(course, report, set(manual))]
     rows.sort(key=lambda r: (r["notebook"], r["grade_id"], r["student_id"]))
     path = course / TO_GRADE_FILE
     _write_csv(path, COLUMNS, [[_cell(r[c]) for c in COLUMNS] for r in rows])
     return path
+
+
+def keep_unapplied(path: Path, manual: dict, log=print) -> Path | None:
+    """Move ``path`` aside when it holds a score that ``manual`` (manual_grades.csv) does not: the
+    instructor's work not yet applied. Returns where it went, or None."""
+    if not path.is_file():
+        return None
+    rows, problems = read_sheet(path)
+    waiting = 0
+    for _, row in rows:
+        score = (row.get("score") or "").strip()
+        if not score:
+            continue
+        held = manual.get((row.get("student_id"), (row.get("notebook") or "").removesuffix(".ipynb"),
+                           row.get("grade_id")))
+        try:
+            same = held is not None and float(held["score"]) == float(score.replace(",", "."))
+        except ValueError:
+            same = False
+        waiting += not same
+    if not waiting:
+        return None
+    aside = path.with_name(f"{path.stem}.unapplied-{time.strftime('%Y%m%d-%H%M%S')}{path.suffix}")
+    path.replace(aside)
+    log(f"WARNING: {path.name} held {waiting} score{'s' * (waiting != 1)} not yet applied: kept as {aside}; apply "
+        f"it with: .venv/bin/python -m autograde.manual_grade --from-csv {aside}")
+    return aside
 
 
 def _cells(course: Path, report: dict, manual: set):

@@ -345,3 +345,26 @@ def test_a_sheet_saved_as_unicode_text_or_in_an_unknown_code_page(tmp_path):
     (tmp_path / "mac.csv").write_bytes((",".join(COLUMNS) + "\n").encode() + b"s001" + b"," * (len(COLUMNS) - 2) + b"\x81\x8d\n")
     got, problems = read_sheet(tmp_path / "mac.csv")
     assert got == [] and "CSV UTF-8" in problems[0]
+
+
+def test_grading_again_never_overwrites_a_sheet_holding_scores_not_yet_applied(course, tmp_path):
+    """An instructor fills to_grade.csv in place, then a late hand-in makes them grade again: the
+    filled sheet is kept aside, said, and can still be applied; a sheet with nothing waiting is
+    simply rewritten."""
+    report = class_of_three(course)
+    path = write_to_grade(course, report)
+    with open(path, newline="", encoding="utf-8-sig") as f:
+        rows = list(csv.DictReader(f))
+    rows[0]["score"] = "1"
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        w = csv.DictWriter(f, list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    lines = []
+    write_to_grade(course, report, log=lines.append)
+    [aside] = list(course.glob("to_grade.unapplied-*.csv"))
+    assert "not yet applied" in lines[0] and str(aside) in lines[0]
+    out = manual_grade.apply_sheet(aside, course, jobs=1, log=lambda _: None)
+    assert len(out["applied"]) == 1
+    write_to_grade(course, report, log=lines.append)                 # now applied: nothing waits
+    assert len(list(course.glob("to_grade.unapplied-*.csv"))) == 1 and len(lines) == 1
