@@ -119,8 +119,9 @@ VENDORED = ("pyproject.toml", "course.yaml", "pusht", "autograde")
 # workers, and the mark scheme (on Gradescope the sentences are a manually graded question)
 NOT_NEEDED = re.compile(r"^autograde/(classes/|manual_grade\.py$|dask_preload\.py$|mark_scheme\.yaml$)")
 NOT_VENDORED = re.compile(r"(^|/)(__pycache__|\.ipynb_checkpoints)(/|$)|\.pyc$|^autograde/(source|release|"
-                          r"submitted|autograded|feedback|shared_stages)/|^autograde/(gradebook\.db|gradebook\."
-                          r"template\.db|grades\.csv|report\.csv|manual_grades\.csv|to_grade\.csv|graded\.json|"
+                          r"submitted|autograded|feedback|feedback_return|shared_stages)/|^autograde/(gradebook\.db|"
+                          r"gradebook\.template\.db|grades\.csv|report\.csv|manual_grades\.csv|to_grade\.csv|"
+                          r"to_grade\.unapplied-[^/]*\.csv|graded\.json|"
                           r"\.grading\.lock|canvas_import\.csv|moodle_import\.csv|lms_export_notes\.txt|class_report\.html)$")
 # what grading imports (autograde/, pusht/, the notebooks' kernels), by their requirements.txt names
 GRADING_PACKAGES = ("torch", "pymunk", "numpy", "matplotlib", "tqdm", "pyyaml", "ipykernel", "nbgrader", "nh3")

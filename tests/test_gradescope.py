@@ -516,3 +516,18 @@ def test_setup_fails_the_image_build_only_where_required_confinement_never_can_b
     assert ("ERROR" in lines[-1] and "Ubuntu 24.04" in lines[-1]) if not ok else "WARNING" in lines[-1]
     monkeypatch.setattr(sandbox, "available", lambda: (True, ""))
     assert gradescope.check({"confine": confine}, log=lines.append)
+
+
+def test_no_output_of_grading_a_class_goes_into_the_bundle():
+    """Every file a class's grading writes in the course folder (students' answers, names, scores,
+    feedback) stays out of the Gradescope bundle, and out of git."""
+    outputs = ["autograde/gradebook.db", "autograde/grades.csv", "autograde/report.csv", "autograde/manual_grades.csv",
+               "autograde/to_grade.csv", "autograde/to_grade.unapplied-20261206-154500.csv", "autograde/graded.json",
+               "autograde/canvas_import.csv", "autograde/moodle_import.csv", "autograde/lms_export_notes.txt",
+               "autograde/class_report.html", "autograde/feedback/canvas_1/ch3.2/02_reward.html",
+               "autograde/feedback_return/canvas_feedback_upload.zip", "autograde/feedback_return/report.json",
+               "autograde/autograded/canvas_1/ch3.2/02_reward.ipynb", "autograde/submitted/s1/ch3.2/02_reward.ipynb"]
+    assert [p for p in outputs if not gradescope.NOT_VENDORED.search(p)] == []
+    ignored = subprocess.run(["git", "-C", str(ROOT), "check-ignore", "--no-index", *outputs], capture_output=True,
+                             text=True).stdout.split()
+    assert sorted(ignored) == sorted(outputs)
