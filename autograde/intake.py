@@ -681,7 +681,6 @@ def _identify(candidates: list[_Candidate], ids: dict[str, str], names: _Names, 
             c.notebook = match.notebook
             if c.by_name is None:
                 c.counter = _reupload(base)[1]     # "_final (2)" is newer than "_final" on a tie
-            if c.by_name is None:
                 c.renamed = f"its name names no notebook of this assignment, but {match.words()}"
             else:
                 c.renamed = f"its name says {c.by_name}, but {match.words()}"
