@@ -1,6 +1,6 @@
 """The hidden tests, judged outside the student's kernel.
 
-Each hidden test is a list of probe cases (``pusht.grading.probe`` runs them). The grader runs
+Each hidden test is a list of probe cases (``pusht.grader.probes.probe`` runs them). The grader runs
 them on the student's function in its probe process (``probe.py``: the function defined from the
 hand-in's cells, in a sandbox where the package's own implementations are absent) and on the
 package's implementation here, and compares the numbers. A test earns its points only if every
@@ -20,7 +20,7 @@ import numpy as np
 
 @dataclass
 class Case:
-    spec: dict                 # what pusht.grading.probe runs
+    spec: dict                 # what pusht.grader.probes.probe runs
     hint: str                  # what the student reads when it fails
     atol: float = 1e-5
 
@@ -35,13 +35,13 @@ class Test:
 
 
 def _gen(name: str, seed: int, kind: str = "call", **fixed) -> dict:
-    """A generated case (``pusht.grading.expand``): generator ``name`` draws every input from the run's
+    """A generated case (``pusht.grader.probes.expand``): generator ``name`` draws every input from the run's
     nonce and ``seed``; ``fixed`` holds only what the case's property fixes, and how it is run
     (``of``, ``row``, ``module_grads``, ``helpers``)."""
     return {"kind": kind, "gen": name, "seed": seed, **fixed}
 
 
-# Every case below is drawn from the run's nonce (``pusht.grading``'s generators), edge cases included:
+# Every case below is drawn from the run's nonce (``pusht.grader.probes``' generators), edge cases included:
 # this file is public, so a fixed input could be recognised and answered from memory. The hand-worked
 # numbers (the lambda-return's [[10.25], [17]], the reward's -0.5 and -0.25, the disagreement's 0.25)
 # are the notebooks' visible tests; here each is a case of the same kind on numbers nobody has seen.
@@ -192,7 +192,7 @@ def helpers() -> dict:
 
 def reference_results(test: Test, fresh: int) -> list[dict]:
     """The reference implementation's raw results on every case, computed in THIS process."""
-    from pusht.grading import probe
+    from pusht.grader.probes import probe
 
     fn = reference_function(test)
     helpers_ = helpers()
@@ -203,7 +203,7 @@ def probe_in_process(test: Test, fn, fresh: int = 12345) -> dict:
     """``fn``'s raw results on ``test``'s cases, run in THIS process, in the form the probe server
     gives (``probe.ProbeServer.run``): for tests of the judge and of the package's answers, never
     for a student's code."""
-    from pusht.grading import decode_results, encode_results, run_probes
+    from pusht.grader.probes import decode_results, encode_results, run_probes
 
     helpers_ = helpers()
     setup, results = decode_results(encode_results(run_probes([c.spec for c in test.cases], fn, fresh, helpers_)),
@@ -283,5 +283,5 @@ def judge(test: Test, probed: dict | None, delegation: list[str] | None = None) 
 
 
 # what the probe process answers, for every case, when the cells above the test define no such
-# function (``pusht.probe_server``): "`name` is not defined by the cells above the test cell"
+# function (``pusht.grader.probe_server``): "`name` is not defined by the cells above the test cell"
 UNDEFINED_MARK = "by the cells above the test cell"

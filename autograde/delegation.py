@@ -50,7 +50,7 @@ from dataclasses import dataclass, field
 
 from . import cellcode, checks
 
-HARNESS_WORDS = ("pusht.grading", "PUSHT_GRADING", "_PROBING", "__pusht_reference__", "ReferenceRefused")
+HARNESS_WORDS = ("pusht.grading", "pusht.grader", "pusht.reference", "PUSHT_GRADING", "_PROBING", "__pusht_reference__", "ReferenceRefused")
 # Called by bare name: Python's own ways of reaching a name at run time.
 DYNAMIC_BUILTINS = {"eval", "exec", "compile", "globals", "vars", "getattr", "__import__", "setattr"}
 # Called by name or as an attribute: the library's ways.

@@ -9,12 +9,12 @@ forged. So no verdict reads it. For each hidden test, the grader instead:
    function needs, and the release's own statements that bind or change what it needs): no
    training, no plotting, no experiment of the chapter's;
 2. chooses a fresh nonce (``secrets``) that seeds the cases' random inputs;
-3. sends the statements, the cases and the nonce to a probe server (``pusht.probe_server``) that
+3. sends the statements, the cases and the nonce to a probe server (``pusht.grader.probe_server``) that
    it started itself in a sandbox of its own (bubblewrap, no network, the student's leased uid,
    the same limits as a kernel, a private size-capped ``/tmp``), with the package bound in a copy
    whose exercise implementations only raise (``stripped.py``); the server forks a child per test
    that defines the function and runs the cases;
-4. reads the child's numbers back over a pipe, at most ``pusht.grading.MAX_RESULTS`` bytes, within
+4. reads the child's numbers back over a pipe, at most ``pusht.grader.probes.MAX_RESULTS`` bytes, within
    the time limit, and decodes them without decompressing or evaluating anything;
 5. judges them against the same cases run on the real implementations in its own process
    (``checks.judge``).
@@ -42,6 +42,8 @@ import sys
 import textwrap
 import time
 from pathlib import Path
+
+from pusht.reference import AUTOGRADE, GRADING_ENV
 
 from . import cellcode, checks, sandbox, stripped
 from .recreate import program, release_statements, test_cell_index  # noqa: F401  the probe's program
@@ -78,7 +80,7 @@ def helpers_for(test) -> dict[str, str]:
 
 # --- where to run it: a probe server of the grader's own ----------------------------------------------
 class ProbeServer:
-    """One grading task's probe server (``pusht.probe_server``) in a sandbox of its own.
+    """One grading task's probe server (``pusht.grader.probe_server``) in a sandbox of its own.
 
     ``with ProbeServer(uid, limits, warm) as server: server.run(test, statements)``. The sandbox
     binds nothing writable but a private ``/tmp``, and the package as ``stripped.package()``."""
@@ -101,12 +103,12 @@ class ProbeServer:
         self.stop()
 
     def start(self) -> None:
-        program = [sys.executable, "-P", "-m", "pusht.probe_server"]
+        program = [sys.executable, "-P", "-m", "pusht.grader.probe_server"]
         env = {k: os.environ[k] for k in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "MKL_CBWR") if k in os.environ}
         env.setdefault("OMP_NUM_THREADS", "1")
         env.setdefault("MKL_NUM_THREADS", "1")
         env["MPLBACKEND"] = "Agg"
-        env["NBGRADER_EXECUTION"] = "autograde"      # as in the kernel: the notebooks' grading settings
+        env[GRADING_ENV] = AUTOGRADE      # as in the kernel: the notebooks' grading settings
         if self.confine:
             env["PUSHT_PROBE_SWEEP"] = "1"              # alone in its sandbox's PID namespace
             package = stripped.package()
@@ -172,7 +174,7 @@ class ProbeServer:
         return bytes(out)
 
     def _reply(self, deadline: float) -> tuple[dict, bytes]:
-        from pusht.grading import MAX_RESULTS
+        from pusht.grader.probes import MAX_RESULTS
 
         head = json.loads(self._read(200, deadline, line=True))
         size = int(head.get("bytes", 0))
@@ -183,7 +185,7 @@ class ProbeServer:
     def run(self, test, statements: list[tuple[str, str]], fresh: int | None = None) -> dict:
         """The raw results of ``test``'s cases on the function ``statements`` define:
         {"fresh", "status", "setup": [lines], "results": [per case: arrays or error] or None}."""
-        from pusht.grading import decode_results
+        from pusht.grader.probes import decode_results
 
         fresh = secrets.randbelow(2 ** 24) if fresh is None else fresh
         req = {"function": test.function, "program": statements, "cases": [c.spec for c in test.cases],

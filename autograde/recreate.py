@@ -24,7 +24,7 @@ The rule is an over-approximation, and it splits the statements in two:
 Imports, function and class definitions are always kept (cheap, and a function may reach them at
 run time by any name). Statements are kept in notebook order, so a later definition replaces an
 earlier one as in the kernel; the probe runs each under the ``__future__`` flags in force at that
-point (``pusht.probe_server``), and one that raises does not stop the others.
+point (``pusht.grader.probe_server``), and one that raises does not stop the others.
 
 The package's functions are taken not to change the objects handed to them in a way the graded
 function could see (the chapter's functions return new values). Everything is linear in the

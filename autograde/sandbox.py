@@ -30,7 +30,7 @@ when it dies the kernel kills every process in the namespace, and nothing outsid
 "every process of a uid" on the host, but for a uid its task still holds (``UidLease.sweep``).
 
 One sandbox per student, not per notebook, is what the grader starts (``Zygote``): all of a
-student's notebooks run in one folder, so it holds ``pusht.zygote``, a process that has imported
+student's notebooks run in one folder, so it holds ``pusht.grader.zygote``, a process that has imported
 ipykernel, torch and the package once, and ``launch`` has it fork each notebook's kernel (the same
 folder, uid and limits; every process the kernel started is killed when it ends). Where no
 factory answers, ``launch`` starts a sandbox of its own around the kernel, as described above.
@@ -63,9 +63,10 @@ from functools import lru_cache
 from pathlib import Path
 
 import pusht
+from pusht.reference import GRADING_ENV
+from pusht.stage_cache import SHARED_CACHE_ENV
 
 KERNEL_NAME = "pusht-sandbox"
-SHARED_CACHE_ENV = "PUSHT_SHARED_CACHE"   # the same name as pusht.data.SHARED_CACHE_ENV (tested)
 PACKAGE_DIR = Path(pusht.__file__).resolve().parent
 DEFAULT_LIMITS = {
     "memory_bytes": 6 * 2 ** 30,      # address space per process (torch reserves a lot of it)
@@ -371,7 +372,7 @@ def bwrap_command(workdir: Path, writable: list[Path], uid: int | None,
     return cmd
 
 
-PASS_ENV = ("NBGRADER_EXECUTION", "TQDM_DISABLE", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
+PASS_ENV = (GRADING_ENV, "TQDM_DISABLE", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
             "MKL_CBWR", "OPENBLAS_CORETYPE", "OPENBLAS_L2_SIZE", "PUSHT_SMOKE")
 
 
@@ -888,7 +889,7 @@ def _check_unbound(cmd: list[str], folder: Path) -> list[str]:
 
 
 class Zygote:
-    """One student's kernel factory (``pusht.zygote``) in a sandbox like a kernel's, around the
+    """One student's kernel factory (``pusht.grader.zygote``) in a sandbox like a kernel's, around the
     folder all of that student's notebooks run in. ``launch`` forks each notebook's kernel from
     it, which skips starting Python, ipykernel and importing torch for every notebook.
 
@@ -897,7 +898,7 @@ class Zygote:
     (where ``launch`` puts a copy of each kernel's connection file: bound read-only).
 
     Only the grader can have the factory fork, and no secret says so (a forked kernel is a copy of
-    the factory's memory, so any secret there is the student's too; see ``pusht.zygote``): the
+    the factory's memory, so any secret there is the student's too; see ``pusht.grader.zygote``): the
     listening socket is made here, at a path in a new 0700 folder next to the state file that the
     sandbox does not bind (checked on its command line), and handed to the factory as a descriptor,
     sent over a socket pair that is its standard input, so that bwrap's own processes never hold it.
@@ -934,7 +935,7 @@ class Zygote:
             # -P: the folder it starts in (the student's) is not put on sys.path for its own imports
             self.proc, self.init = start_sandbox(
                 lambda fd: _check_unbound(_confinement(self.s, self.workdir, [conns], info_fd=fd), self._folder),
-                [sys.executable, "-P", "-m", "pusht.zygote", str(ready)], memory=sandbox_bytes(self.s.get("limits")),
+                [sys.executable, "-P", "-m", "pusht.grader.zygote", str(ready)], memory=sandbox_bytes(self.s.get("limits")),
                 stdin=theirs.fileno(), stdout=subprocess.DEVNULL)
             theirs.close()
             try:

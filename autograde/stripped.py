@@ -8,7 +8,7 @@ text on disk. A submission that calls them gets ``ReferenceRefused`` by construc
 name, wrapper or run-time lookup it reaches them through.
 
 A function is an implementation of an exercise when it carries ``@reference(...)``
-(``pusht.grading.reference``); every such function in every module of the package is found from
+(``pusht.reference.reference``); every such function in every module of the package is found from
 the source (``ast``), and its body becomes one ``raise`` (signature and decorator kept, so imports
 and ``inspect.signature`` still work). Everything else is copied as it is, compiled once.
 """
@@ -52,7 +52,7 @@ class _Strip(ast.NodeTransformer):
         self.found.append(node.name)
         msg = (f"{self.module}.{node.name} is the package's own solution to {exercise}; while grading it is "
                f"not available: your function must compute the result itself")
-        node.body = [cellcode.python_tree(f"from pusht.grading import ReferenceRefused\nraise ReferenceRefused({msg!r})").body[0],
+        node.body = [cellcode.python_tree(f"from pusht.reference import ReferenceRefused\nraise ReferenceRefused({msg!r})").body[0],
                      cellcode.python_tree(f"raise ReferenceRefused({msg!r})").body[0]]
         return node
 

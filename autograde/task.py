@@ -10,7 +10,6 @@ from __future__ import annotations
 import io
 import json
 import os
-import re
 import shutil
 import signal
 import stat
@@ -23,12 +22,12 @@ from functools import lru_cache
 from pathlib import Path
 
 import nbformat
+from pusht.stage_cache import FILE_PATTERN as CACHE_FILE   # pusht's stage cache files
 
 from . import checks, outputs, probe, sandbox, tripwire
 from .course import ASSIGNMENT, _last_error, private_course, tool_env
 
 
-CACHE_FILE = re.compile(r"^(expert_.*\.npz|(wm|agent|loop)_[0-9a-f]{16}\.pt)$")   # pusht's stage cache files
 
 
 _JUDGING = threading.Lock()

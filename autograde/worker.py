@@ -16,6 +16,8 @@ import sys
 import time
 from pathlib import Path
 
+from pusht.reference import AUTOGRADE, GRADING_ENV
+
 from . import sandbox
 from .outputs import autograde_steps
 from .course import ASSIGNMENT, COURSE_ID, _last_error
@@ -45,7 +47,7 @@ def worker(priv: Path, student: str, timeout: int, confine: bool, uid: int | Non
     for p in (sockets, runtime):
         p.mkdir(parents=True, exist_ok=True)
     os.environ["JUPYTER_RUNTIME_DIR"] = str(runtime)
-    os.environ["NBGRADER_EXECUTION"] = "autograde"
+    os.environ[GRADING_ENV] = AUTOGRADE
     os.environ["TQDM_DISABLE"] = "1"      # no progress bars (and no rates or times) in graded outputs
     # Grading runs one task per core, so a kernel's torch must not start a thread per core of its own:
     # two kernels doing so on two cores made notebooks several times slower (OpenMP threads waiting

@@ -104,7 +104,7 @@ def host_yardsticks(repeats: int) -> tuple[float, float]:
 def host_description() -> str:
     """The run's platform fingerprint (as meta.yaml records it) plus the CPU model and family, from
     /proc/cpuinfo where there is one."""
-    from pusht.dreamer import platform_fingerprint
+    from pusht.fingerprint import platform_fingerprint
 
     from pusht.host import cpu_model
 

@@ -1,22 +1,10 @@
-"""Taking the imagination gap apart: what the model does on its own, what the actor adds, and how
-far the deployed policy takes the model from the data it knows.
+"""How far the deployed policy takes the model from the data it knows: where the pusher goes, how
+well the model tracks the policy's own real actions against the expert's, and how the long dream's
+end points collapse.
 
 Everything here reads rollouts the evaluation already made (``evaluate.two_world_eval``) plus the
-expert data; nothing trains. The numbers go into ``metrics.json`` and notebook 04 reads them.
-
-The split of the gap (imagined minus real reward per step, over a span of steps):
-
-    gap = drift + motion + training
-
-* ``drift``    = zero-action dream - zero-action reality: the model alone, nobody pushes;
-* ``motion``   = what the untrained actor's actions change in the dream beyond what they change
-                 in reality (relative to zero actions);
-* ``training`` = what training changes in the dream beyond what it changes in reality (relative
-                 to the untrained actor): the actor exploiting the model.
-
-The three terms sum to the gap exactly (it is an identity), so each is a share of it. Measured at
-the actor's own training horizon (``imag_horizon`` steps, what its gradient saw) and over the whole
-evaluation (``eval_horizon`` steps, far past the model's training clips).
+expert data; nothing trains. The numbers go into ``metrics.json`` and notebook 04 reads them. The
+split of the gap itself into drift, motion and training is ``split.py``'s.
 """
 
 from __future__ import annotations
@@ -25,8 +13,8 @@ import numpy as np
 import torch
 
 from .env import ARENA_HALF, PUSHER_RADIUS, WALL_RADIUS, obs_to_pose
+from .evaluate import Rollout, dream
 
-POLICIES = ("zero", "untrained", "trained")
 # A pusher whose centre is this close to where a wall stops it counts as "against the wall". 5 mm
 # is 1/6 of its radius; a pusher travelling at full speed moves 50 mm per step, so it is not a
 # pusher merely passing by.
@@ -40,130 +28,6 @@ def at_wall(obs: np.ndarray) -> np.ndarray:
     return (np.abs(pusher) >= WALL_STOP - AT_WALL_TOL).any(axis=-1)
 
 
-def _rewards(rollout, part: str | None) -> np.ndarray:
-    return rollout.rewards if part is None else rollout.reward_part(part)
-
-
-def span_return(rollout, steps: int | None, part: str | None = None) -> float:
-    """Reward per step over the first ``steps`` steps (all of them for None): each start's mean over
-    the steps it lasted, averaged over the starts, as the headline's ``imagined_return_per_step`` and
-    ``real_return_per_step`` are (one number per quantity: an episode that ends early, at a success,
-    would weigh differently if every step of every start were pooled). With ``part`` ("position" or
-    "yaw"), that term of the reward alone; the two terms add up to the whole start by start."""
-    return float(np.nanmean(_per_start(rollout, steps, part)))
-
-
-def _per_start(rollout, steps, part=None):
-    r = _rewards(rollout, part)
-    r = r if steps is None else r[:steps]
-    return np.nanmean(r, axis=0)                                           # (B,)
-
-
-def _se(x: np.ndarray) -> float:
-    return float(x.std(ddof=1) / np.sqrt(len(x))) if len(x) > 1 else float("nan")
-
-
-def gap_split(rollouts: dict, steps: int | None, part: str | None = None) -> dict:
-    """Per-step return of each policy in each world over the first ``steps`` steps, and the gap's
-    three terms (see the module doc). ``rollouts`` maps ``dream_<policy>`` and ``real_<policy>``
-    (``policy`` in POLICIES) to ``Rollout``. With ``part`` ("position" or "yaw") the same split of
-    that term of the reward alone: the reward is the sum of its two terms, so every quantity here
-    is the sum of its position and yaw versions."""
-    R = {(p, w): span_return(rollouts[f"{w}_{p}"], steps, part) for p in POLICIES for w in ("dream", "real")}
-    out = {f"{p}_{w}": v for (p, w), v in R.items()}
-    out["gap"] = R["trained", "dream"] - R["trained", "real"]
-    out["drift"] = R["zero", "dream"] - R["zero", "real"]
-    out["motion"] = ((R["untrained", "dream"] - R["zero", "dream"])
-                     - (R["untrained", "real"] - R["zero", "real"]))
-    out["training"] = ((R["trained", "dream"] - R["untrained", "dream"])
-                       - (R["trained", "real"] - R["untrained", "real"]))
-    # The noise of each term: the standard error of its mean over the starts (every term is a mean
-    # of per-start differences, all on the same starts). Whether a term is told apart from zero,
-    # and whether it is large enough to matter, the notebooks decide (pusht/nb/stats.py).
-    P = {(p, w): _per_start(rollouts[f"{w}_{p}"], steps, part) for p in POLICIES for w in ("dream", "real")}
-    per_start = {"gap": P["trained", "dream"] - P["trained", "real"],
-                 "drift": P["zero", "dream"] - P["zero", "real"],
-                 "motion": (P["untrained", "dream"] - P["zero", "dream"]) - (P["untrained", "real"] - P["zero", "real"]),
-                 "training": (P["trained", "dream"] - P["untrained", "dream"])
-                 - (P["trained", "real"] - P["untrained", "real"])}
-    for key, x in per_start.items():
-        out[f"{key}_se"] = _se(x)
-    for (pol, w), x in P.items():                   # each world's rating of each policy, with its own noise
-        out[f"{pol}_{w}_se"] = _se(x)
-    # Exercise 1's question, "is the drift at least half of the gap?", as one quantity with its own
-    # standard error over the starts (the drift is part of the gap, so the two are not independent)
-    out["drift_minus_half_gap"] = float(np.nanmean(per_start["drift"] - 0.5 * per_start["gap"]))
-    out["drift_minus_half_gap_se"] = _se(per_start["drift"] - 0.5 * per_start["gap"])
-    return out
-
-
-def size_split(rollouts: dict, steps: int | None) -> dict:
-    """The SIZE of the gap's and of the drift's error over the first ``steps`` steps, and its exact
-    standard error: a gap near zero can hide a large error when its position and yaw halves have
-    opposite signs, so a change of the error is judged on |position half| + |yaw half|.
-
-    For ``key`` in ("gap", "drift"): ``{key}_size`` = |mean position half| + |mean yaw half|; its
-    standard error ``{key}_size_se`` is that of the per-start values s_p * position_i + s_y * yaw_i
-    (s the sign of each half's mean), which average to the size exactly. When the halves share a
-    sign the size is |gap| and its standard error is the gap's: one quantity, one test.
-    ``{key}_yaw_minus_position`` = |yaw half| - |position half|, with its exact standard error
-    ``{key}_yaw_minus_position_se`` (per start s_y * yaw_i - s_p * position_i): which half is larger.
-    """
-    pos = {(p, w): _per_start(rollouts[f"{w}_{p}"], steps, "position") for p in POLICIES for w in ("dream", "real")}
-    yaw = {(p, w): _per_start(rollouts[f"{w}_{p}"], steps, "yaw") for p in POLICIES for w in ("dream", "real")}
-    out = {}
-    for key, pol in (("gap", "trained"), ("drift", "zero")):
-        xp = pos[pol, "dream"] - pos[pol, "real"]
-        xy = yaw[pol, "dream"] - yaw[pol, "real"]
-        ok = ~(np.isnan(xp) | np.isnan(xy))
-        xp, xy = xp[ok], xy[ok]
-        sp, sy = np.sign(xp.mean()) or 1.0, np.sign(xy.mean()) or 1.0
-        size, diff = sp * xp + sy * xy, sy * xy - sp * xp
-        out[f"{key}_size"] = float(size.mean())
-        out[f"{key}_size_se"] = _se(size)
-        out[f"{key}_yaw_minus_position"] = float(diff.mean())
-        out[f"{key}_yaw_minus_position_se"] = _se(diff)
-    return out
-
-
-def expert_signal(rollouts: dict, steps: int | None) -> dict:
-    """Can the dream recognise success? The scripted expert solves the real task; its actions are
-    replayed in the dream from the same starts (``dream_expert``). Over the first ``steps`` steps:
-
-    * ``expert_{dream,real}_return_per_step``: what each world pays the expert;
-    * ``expert_signal_{dream,real}``: the expert minus zero actions in each world, with standard
-      errors over the starts (``..._se``). A dream whose signal is clearly positive rewards the
-      pushes that solve the task over standing still: a learnable signal existed. A signal near
-      zero, or negative, means the dream cannot tell success from doing nothing;
-    * ``expert_signal_yaw_dream``/``_real`` and ``..._position_...``: the same for each term;
-    * ``expert_gap`` (± ``expert_gap_se``): the dream's pay for the expert's pushes minus reality's, per
-      start: the expert's own imagination gap, which needs no zero-action control;
-    * ``zero_dream_block_moved``: how far the zero-action dream moves a block nobody touches (m, mean
-      over the starts of its largest displacement in the span). The expert signal compares the expert
-      with standing still; where the dream moves the untouched block beyond the success tolerance,
-      "standing still" is not standing still in the dream, and the control is invalid.
-    """
-    out = {}
-    # the expert's own gap: what the dream pays its pushes minus what reality pays them (no zero-action
-    # control in it), and whether the zero-action control is valid: how far the dream moves a block
-    # nobody touches (mean over starts of the largest displacement within the span, m; a real untouched
-    # block does not move)
-    x = _per_start(rollouts["dream_expert"], steps) - _per_start(rollouts["real_expert"], steps)
-    x = x[~np.isnan(x)]
-    out["expert_gap"], out["expert_gap_se"] = float(np.mean(x)), _se(x)
-    obs = np.asarray(rollouts["dream_zero"].obs)
-    obs = obs if steps is None else obs[:steps + 1]
-    out["zero_dream_block_moved"] = float(np.linalg.norm(obs[:, :, 2:4] - obs[:1, :, 2:4], axis=-1).max(0).mean())
-    for w in ("dream", "real"):
-        out[f"expert_{w}_return_per_step"] = span_return(rollouts[f"{w}_expert"], steps)
-        for part in (None, "position", "yaw"):
-            tag = f"_{part}" if part else ""
-            x = _per_start(rollouts[f"{w}_expert"], steps, part) - _per_start(rollouts[f"{w}_zero"], steps, part)
-            out[f"expert_signal{tag}_{w}"] = float(np.nanmean(x))
-            out[f"expert_signal{tag}_{w}_se"] = _se(x[~np.isnan(x)])
-    return out
-
-
 def replay_error(wm, real, mean, std) -> dict:
     """Dream from each real start under the actions the policy really took, and compare.
 
@@ -171,8 +35,6 @@ def replay_error(wm, real, mean, std) -> dict:
     pusher (block centre) after each step. The dream is warmed on the start frame only, as the
     evaluation dream is, so any error is the model's own prediction of where the actions lead.
     """
-    from .evaluate import dream
-
     mean_np, std_np = mean.detach().cpu().numpy(), std.detach().cpu().numpy()
     norm0 = torch.as_tensor((real.obs[0] - mean_np) / std_np, dtype=torch.float32)
     actions = torch.as_tensor(real.actions, dtype=torch.float32)
@@ -191,8 +53,6 @@ def replay_error(wm, real, mean, std) -> dict:
 def expert_replay_error(wm, val_obs: np.ndarray, val_act: np.ndarray, mean, std) -> dict:
     """The same replay on held-out EXPERT clips (metres in, (T, M) errors out): the model on
     the kind of data it was trained on, the reference for :func:`replay_error`."""
-    from .evaluate import Rollout
-
     T = val_act.shape[1]
     roll = Rollout(obs=np.swapaxes(val_obs, 0, 1), actions=np.swapaxes(val_act, 0, 1),
                    rewards=np.zeros((T, len(val_obs))), pos_err=np.zeros((T, len(val_obs))),

@@ -1,13 +1,13 @@
 """Expert data for the world model: short scripted-expert sequences from fresh random starts.
 
 The envs run in lockstep so the vectorised expert decides for all of them in one call. Results are
-deterministic by seed, and can be cached on disk: the cache key includes the source of env.py and
-expert.py, so editing the physics or the expert can never serve stale data.
+deterministic by seed, and can be cached on disk: the file's name includes the source of every module
+this one runs (``stage_cache.source_hash``: env.py and expert.py among them), so editing the physics
+or the expert can never serve stale data.
 """
 
 from __future__ import annotations
 
-import hashlib
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,6 +17,7 @@ import torch
 
 from .env import ACT_DIM, OBS_DIM, PushTEnv
 from .expert import ScriptedExpert
+from .stage_cache import cached_file, source_hash
 
 # Disjoint seed ranges: a start used for training can never be an evaluation start.
 TRAIN_SEED_BASE = 0               # + run_seed * 1_000_000 + i
@@ -56,34 +57,8 @@ def collect_sequences(seeds, seq_len: int):
     return obs, act
 
 
-def _source_hash() -> str:
-    here = Path(__file__).parent
-    h = hashlib.sha256()
-    for name in ("env.py", "expert.py", "data.py"):
-        h.update((here / name).read_bytes())
-    return h.hexdigest()[:12]
-
-
 def default_cache_dir() -> Path:
     return Path(os.environ.get("PUSHT_CACHE", Path.home() / ".cache" / "pusht-dreamer"))
-
-
-SHARED_CACHE_ENV = "PUSHT_SHARED_CACHE"
-
-
-def cached_file(path: Path) -> Path | None:
-    """Where a cache file named like ``path`` can be read: ``path`` itself, else a file of the same
-    name in the read-only folder ``$PUSHT_SHARED_CACHE`` (set by the grader: stages computed once,
-    by the instructor's own notebooks, for every student; see autograde/grade.py), else None.
-
-    Every cache file's name is the hash of everything it was computed from (config fields and the
-    package's source), so a file of the same name is the same stage."""
-    if path.exists():
-        return path
-    shared = os.environ.get(SHARED_CACHE_ENV)
-    if shared and (Path(shared) / path.name).is_file():
-        return Path(shared) / path.name
-    return None
 
 
 @dataclass
@@ -114,7 +89,7 @@ def load_expert_data(run_seed: int, n_episodes: int, n_val_episodes: int, seq_le
     """Collect (or load from ``cache_dir``) the expert data of one run. ``None`` disables caching."""
     path = None
     if cache_dir is not None:
-        key = f"expert_s{run_seed}_n{n_episodes}_v{n_val_episodes}_T{seq_len}_{_source_hash()}.npz"
+        key = f"expert_s{run_seed}_n{n_episodes}_v{n_val_episodes}_T{seq_len}_{source_hash(__name__)}.npz"
         path = Path(cache_dir) / key
         found = cached_file(path)
         if found is not None:

@@ -30,7 +30,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from .grading import reference
+from .reference import reference
 
 BLOCK_XY = slice(2, 4)     # the block centre's (x, y) in an observation
 

@@ -21,8 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from .grading import reference
 from .env import ANG_SCALE, POS_SCALE, PUSHER_RADIUS, PushTEnv, distance_to_tee, obs_to_pose
+from .reference import reference
 from .reward import reward_from_obs
 
 
@@ -224,10 +224,10 @@ def two_world_eval(wm, agent, init_agent, seeds, horizon: int, mean, std,
     ``"dream"``, ``"real"`` (the trained policy; also under ``"dream_trained"``/``"real_trained"``),
     ``"dream_zero"``, ``"dream_untrained"``, ``"real_zero"``, ``"real_untrained"``, ``"real_expert"``
     (the scripted expert in reality) and ``"dream_expert"`` (its actions replayed in the dream) to
-    ``Rollout``. With ``train_horizon``, the gap and its split (``analysis.gap_split``) are measured
+    ``Rollout``. With ``train_horizon``, the gap and its split (``split.gap_split``) are measured
     over the first ``train_horizon`` steps (what the actor's gradient saw) and over all of them, in
     total and for each of the reward's two terms (keys ``..._position_<span>``, ``..._yaw_<span>``),
-    and so is the expert control (``analysis.expert_signal``).
+    and so is the expert control (``split.expert_signal``).
     """
     was_training = agent.training
     agent.eval()
@@ -283,7 +283,7 @@ def two_world_eval(wm, agent, init_agent, seeds, horizon: int, mean, std,
     # the control for "real successes appear": how often a pusher that never moves succeeds from these starts
     metrics["zero_action_real_success_rate"] = float(rollouts["real_zero"].success.mean())
     if train_horizon is not None:
-        from .analysis import expert_signal, gap_split, size_split
+        from .split import expert_signal, gap_split, size_split
 
         for span, steps in (("train_horizon", min(train_horizon, horizon)), ("eval_horizon", None)):
             for part in (None, "position", "yaw"):

@@ -25,8 +25,8 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
-from .grading import reference
 from .optim import Adam
+from .reference import reference
 from .reward import reward_from_obs
 
 

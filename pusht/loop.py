@@ -38,19 +38,21 @@ import numpy as np
 import torch
 
 from .agent import ActorCritic
+from .agent_stage import AGENT_FIELDS
 from .analysis import shift_metrics
 from .config import Config
 from .data import EVAL_SEED_BASE, LOOP_SEED_BASE, start_seeds
-from .dreamer import (AGENT_FIELDS, AGENT_MODULES, _cache_path, _cached, _round, _wrap, gc_paused,
-                      new_world_model, run)
+from .dreamer import round_metrics, run
 from .env import ACT_DIM, OBS_NAMES
 from .evaluate import Rollout, policy_of, real_rollout, two_world_eval
 from .imagination import freeze, train_in_imagination
+from .runtime import gc_paused, labelled
+from .stage_cache import cached, stage_path
+from .wm_stage import new_world_model
 from .world_model import prediction_error_vs_copy_last, train_world_model
 
 LOOP_FIELDS = ("loop_rounds", "loop_episodes", "loop_episode_len", "loop_noise", "loop_wm", "loop_wm_epochs",
                "loop_actor", "loop_imag_iters")
-LOOP_MODULES = AGENT_MODULES + ("analysis.py", "ensemble.py", "loop.py")
 MODES = ("continue", "retrain")
 
 
@@ -131,7 +133,7 @@ def train_model_round(wm, cfg: Config, obs, act, rnd: int, log=None, progress=No
         member.train()
         with gc_paused():
             train_world_model(member, obs, act, cfg.replace(wm_epochs=epochs), gen,
-                              progress=_wrap(progress, f"round {rnd}: world model"), log=log)
+                              progress=labelled(progress, f"round {rnd}: world model"), log=log)
         member.eval()
         members.append(member)
     new = EnsembleWorldModel(members) if len(members) > 1 else members[0]
@@ -151,7 +153,7 @@ def train_agent_round(wm, agent, cfg: Config, starts_obs, starts_act, mean, std,
         new, iters = ActorCritic(wm.hidden_dim + wm.latent_dim, ACT_DIM, cfg.hidden_dim).to(cfg.device), cfg.imag_iters
     with gc_paused():
         hist = train_in_imagination(wm, new, starts_obs, starts_act, mean, std, cfg.replace(imag_iters=iters), gen,
-                                    progress=_wrap(progress, f"round {rnd}: imagination"), log=log)
+                                    progress=labelled(progress, f"round {rnd}: imagination"), log=log)
     return new, hist
 
 
@@ -190,7 +192,7 @@ def measure_round(cfg: Config, rnd: int, wm, agent, init_agent, data, T, hist: d
                "real_block_toward_target": ev["spawn_tee_dist"] - ev["real_final_tee_dist"],
                "imagined_reward_first20_train": float(np.mean(hist["imag_reward"][:k])),
                "imagined_reward_last20_train": float(np.mean(hist["imag_reward"][-k:]))}
-    return {key: _round(v) for key, v in metrics.items()}, rollouts
+    return round_metrics(metrics), rollouts
 
 
 # --- the loop -------------------------------------------------------------------------------------
@@ -244,7 +246,7 @@ def run_loop(cfg: Config, cache_dir=None, model_cache=None, log=print, progress=
                 on_round(metrics)
         return LoopResult(cfg, rounds, rolls, wm, agent, timing)
 
-    return _cached(_cache_path(model_cache, "loop", cfg, AGENT_FIELDS + LOOP_FIELDS, LOOP_MODULES), build)
+    return cached(stage_path(model_cache, "loop", cfg, AGENT_FIELDS + LOOP_FIELDS, __name__), build)
 
 
 def save_loop(result: LoopResult, out: Path) -> None:
@@ -273,8 +275,8 @@ def round_line(m: dict) -> str:
 def main(argv=None) -> int:
     from tqdm.auto import tqdm
 
+    from .cli import parse_config
     from .data import default_cache_dir
-    from .dreamer import parse_config
 
     argv = sys.argv[1:] if argv is None else list(argv)
     if not any(a == "--out" or a.startswith("--out=") for a in argv):

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import torch
 
-from .grading import reference
 from .env import ANG_SCALE, POS_SCALE
+from .reference import reference
 
 
 @reference("02_reward: reward_from_obs")

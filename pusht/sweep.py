@@ -37,7 +37,8 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 
 from .config import Config
-from .data import cached_file
+from .reference import grading
+from .stage_cache import cached_file
 
 WORKERS_ENV = "PUSHT_WORKERS"
 # Each worker imports torch and trains one run at a time. Its peak resident memory at the default
@@ -133,7 +134,7 @@ def default_workers(cfgs) -> int:
             raise ValueError(f"{WORKERS_ENV} must be a whole number of worker processes, 1 or more "
                              f"(1 runs everything in this process); got {value!r}")
         return int(value)
-    if "NBGRADER_EXECUTION" in os.environ or any(c.device != "cpu" for c in cfgs):
+    if grading() or any(c.device != "cpu" for c in cfgs):
         return 1
     threads = max(max(c.threads for c in cfgs), 1)
     workers = usable_cores() // threads
@@ -154,7 +155,7 @@ def describe(cfg: Config) -> str:
 
 def _world_model_task(cfg, cache_dir, model_cache):
     """In a worker: train (or load) the world-model stage of ``cfg`` into the cache; return nothing."""
-    from .dreamer import world_model_stage
+    from .wm_stage import world_model_stage
 
     world_model_stage(cfg, cache_dir, model_cache, log=None)
 
@@ -194,7 +195,9 @@ class Sweep:
     with an error, or without having collected the results, stops the workers."""
 
     def __init__(self, cfgs, cache_dir, model_cache, workers: int | None, desc: str):
-        from .dreamer import AGENT_FIELDS, AGENT_MODULES, WM_FIELDS, WM_MODULES, _cache_path
+        from .agent_stage import AGENT_FIELDS
+        from .stage_cache import stage_path
+        from .wm_stage import WM_FIELDS
 
         self.cfgs, self.cache_dir, self.model_cache, self.desc = cfgs, cache_dir, model_cache, desc
         self._results: list = [None] * len(cfgs)
@@ -208,7 +211,7 @@ class Sweep:
         # A worker takes about 2 s to start, more than a smoke run or a run whose trained agent is in
         # the cache (only its evaluation is left): those run here.
         def agent_cached(c):
-            path = _cache_path(model_cache, "agent", c, AGENT_FIELDS, AGENT_MODULES)
+            path = stage_path(model_cache, "agent", c, AGENT_FIELDS, "pusht.agent_stage")
             return path is not None and cached_file(path) is not None
 
         pooled = [i for i, c in enumerate(cfgs) if not c.smoke and not agent_cached(c)]
@@ -222,7 +225,7 @@ class Sweep:
         # Runs that share an uncached world model wait for one task to train it (keyed as its cache is).
         ready: list = []
         for i in self.pooled:
-            path = _cache_path(model_cache, "wm", cfgs[i], WM_FIELDS, WM_MODULES)
+            path = stage_path(model_cache, "wm", cfgs[i], WM_FIELDS, "pusht.wm_stage")
             if path is None or cached_file(path) is not None:
                 ready.append(i)
             else:

@@ -9,7 +9,7 @@
 Every number in meta.yaml comes from this script's runs; the chapter page's own figures are stored
 beside ours (under ``page``) so a reader can compare, never mixed into them. The determinism test
 (tests/test_reproduce.py) re-runs seed 0 and checks it against the ``seeds`` block here: bit for
-bit where the platform's float-deciding fingerprint (``dreamer.FLOAT_KEYS``) matches the recorded
+bit where the platform's float-deciding fingerprint (``fingerprint.FLOAT_KEYS``) matches the recorded
 one, and elsewhere within the ``tolerance`` bands this script measures (see ``measure_tolerance``).
 """
 
@@ -33,7 +33,8 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "scripts"))
 
 from pusht.config import make_config  # noqa: E402
-from pusht.dreamer import FLOAT_KEYS, platform_fingerprint, run  # noqa: E402
+from pusht.dreamer import run  # noqa: E402
+from pusht.fingerprint import FLOAT_KEYS, platform_fingerprint  # noqa: E402
 from pusht.nb.horizon import EX2_ACTOR_SEEDS  # noqa: E402
 from pusht.page import PAGE  # noqa: E402
 

@@ -1,4 +1,4 @@
-"""The hidden tests' judge, without nbgrader: the probes' raw numbers (``pusht.grading``, run here
+"""The hidden tests' judge, without nbgrader: the probes' raw numbers (``pusht.grader.probes``, run here
 in this process) and how the grader rules on them (``autograde/checks.py``).
 
 The solution notebooks' implementations pass every case; a wrong one and one that returns

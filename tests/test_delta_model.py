@@ -14,7 +14,9 @@ import torch
 from pusht.analysis import expert_replay_error
 from pusht.config import make_config
 from pusht.data import load_expert_data
-from pusht.dreamer import WM_FIELDS, WM_MODULES, _cache_path, parse_config, run
+from pusht.dreamer import parse_config, run
+from pusht.stage_cache import stage_path
+from pusht.wm_stage import WM_FIELDS
 from pusht.evaluate import dream, zero_policy
 from pusht.imagination import freeze, imagine
 from pusht.agent import ActorCritic
@@ -212,7 +214,7 @@ def test_wm_predicts_is_validated_a_cli_choice_and_part_of_the_cache_key(tmp_pat
     assert cfg.wm_predicts == "delta" and make_config().wm_predicts == "state"
     with pytest.raises(SystemExit):
         parse_config(["--wm_predicts", "deltas"])
-    keys = {p: _cache_path(tmp_path, "wm", make_config(smoke=True, wm_predicts=p), WM_FIELDS, WM_MODULES)
+    keys = {p: stage_path(tmp_path, "wm", make_config(smoke=True, wm_predicts=p), WM_FIELDS, "pusht.wm_stage")
             for p in ("state", "delta")}
     assert keys["state"] != keys["delta"]
 

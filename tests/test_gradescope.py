@@ -80,7 +80,8 @@ def test_the_zip_is_laid_out_as_gradescope_asks(bundle):
             assert (ROOT / rel).read_bytes() == data, rel
     need = {"pyproject.toml", "course.yaml", "autograde/gradescope.py", "autograde/grade.py", "autograde/checks.py",
             "autograde/probe.py", "autograde/nbgrader_config.py", "autograde/lms_export.py", "autograde/class_report.py",
-            "pusht/__init__.py", "pusht/grading.py", "pusht/zygote.py", "pusht/nb/times.json"}
+            "pusht/__init__.py", "pusht/grading.py", "pusht/grader/zygote.py", "pusht/grader/probes.py",
+            "pusht/nb/times.json"}
     need |= {f"{GRADING_SOURCE}/{n}" for n in NOTEBOOKS}
     assert need <= set(course), need - set(course)
     assert set(course) >= {f"autograde/{p.name}" for p in (ROOT / "autograde").glob("*.py")} - \
@@ -92,7 +93,7 @@ def test_the_zip_is_laid_out_as_gradescope_asks(bundle):
                 "autograde/manual_grade.py", "autograde/dask_preload.py")
     assert not [n for n in infos if n.startswith(unneeded) or n.startswith(tuple(f"course/{u}" for u in unneeded))]
     assert not [n for n in course if "__pycache__" in n or n.endswith((".pyc", ".db")) or n.startswith("autograde/source/")]
-    assert 'packages = ["pusht", "pusht.nb", "autograde"]' in course["pyproject.toml"].decode()
+    assert 'packages = ["pusht", "pusht.grader", "pusht.nb", "autograde"]' in course["pyproject.toml"].decode()
     # torch's CPU build at requirements.txt's pin, the rest of what grading needs with requirements.txt's pins
     assert "--index-url https://download.pytorch.org/whl/cpu \"torch==2.13.0\"" in setup
     assert "torch==2.13.0" in (ROOT / "requirements.txt").read_text()
@@ -216,10 +217,13 @@ class Container:
             os.chmod(root / "source" / script, 0o755)
         shutil.copy(root / "source" / "run_autograder", root / "run_autograder")
         venv = root / "source" / "course" / ".venv"
-        made = subprocess.run(["cp", "-al", sys.prefix, str(venv)], capture_output=True, text=True)
+        # the venv's real folder: where .venv is a symbolic link (a git worktree sharing one venv), copying
+        # the link would make the clone the real venv, and the lines below would rewrite its install
+        made = subprocess.run(["cp", "-al", os.path.realpath(sys.prefix), str(venv)], capture_output=True, text=True)
         if made.returncode:
             pytest.skip(f"the venv cannot be cloned with hard links here: {made.stderr.strip()}")
         site = next(venv.glob("lib/python3*/site-packages"))
+        assert not venv.is_symlink() and venv.resolve() != Path(sys.prefix).resolve()
         for p in site.iterdir():          # the working tree's install of this package out, the bundle's in
             if p.name.startswith("__editable__") and "pusht_dreamer" in p.name or p.name in ("pusht", "autograde"):
                 shutil.rmtree(p) if p.is_dir() else p.unlink()

@@ -1,7 +1,7 @@
 """No hidden input is knowable before the run (issue 37, item 3).
 
 ``autograde/checks.py`` is public, so every hidden case is drawn from the run's nonce by a generator
-in ``pusht/grading.py`` that keeps the property the case tests. Here:
+in ``pusht/grader/probes.py`` that keeps the property the case tests. Here:
 
 * every case's inputs (each tensor and number it hands the function, the agent's and the world
   model's weights, the start frames) differ between two nonces, except the numbers the case's
@@ -26,7 +26,7 @@ import pytest
 import torch
 
 from autograde import checks
-from pusht import grading
+from pusht.grader import probes as grading
 from pusht.ensemble import block_disagreement as ref_disagreement
 from pusht.evaluate import dream as ref_dream
 from pusht.imagination import actor_critic_losses as ref_losses

@@ -47,7 +47,7 @@ def factory_pid(sock: str) -> int:
     """The pid of the kernel factory listening on ``sock`` (not the bwrap processes around it)."""
     for pid in cmdlines_with(sock):
         argv = Path(f"/proc/{pid}/cmdline").read_bytes().decode().split("\0")
-        if argv[1:5] == ["-P", "-m", "pusht.zygote", sock]:
+        if argv[1:5] == ["-P", "-m", "pusht.grader.zygote", sock]:
             return pid
     raise AssertionError(f"no factory on {sock}")
 

@@ -63,7 +63,7 @@ def metrics(dream=-0.215, real=-0.400, se=0.020, dream_tr=-0.285, real_tr=-0.400
     m.setdefault("gap_drift_position_eval_horizon", m["gap_drift_eval_horizon"] - m["gap_drift_yaw_eval_horizon"])
     m.setdefault("gap_drift_se_yaw_eval_horizon", 0.8 * m["gap_drift_se_eval_horizon"])
     m.setdefault("gap_drift_se_position_eval_horizon", 0.7 * m["gap_drift_se_eval_horizon"])
-    # the size of each error and |yaw| - |position|, with per-start standard errors (analysis.size_split):
+    # the size of each error and |yaw| - |position|, with per-start standard errors (split.size_split):
     # where the halves share a sign, the size is the gap's size and its standard error the gap's
     for key, spans in (("imagination_gap", ("train_horizon", "eval_horizon")), ("gap_drift", ("eval_horizon",))):
         for span in spans:

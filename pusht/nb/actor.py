@@ -10,7 +10,7 @@ from ..imagination import actor_params, lambda_return, set_gradients
 from ..selfcheck import Question
 from . import figure
 from .claims import claim
-from .stats import MIN_REWARD_EFFECT, Test, outcome, sign_test, t_quantile, welch
+from .stats import MIN_REWARD_EFFECT, Test, beyond, outcome, sign_test, t_quantile, welch
 
 # --- what each loss reaches --------------------------------------------------------------------
 
@@ -281,16 +281,16 @@ def _change_claims(name: str, what: str, control: str | None = None):
     @claim(f"03.{name}_rose", f"{what} rose beyond k standard errors and by at least the minimum effect",
            control=control)
     def rose(*, diff, se, k, min_effect):
-        return diff > k * se and diff >= min_effect and diff > 0
+        return beyond(diff, se, k, min_effect, +1)
 
     @claim(f"03.{name}_fell", f"{what} fell beyond k standard errors and by at least the minimum effect",
            control=control)
     def fell(*, diff, se, k, min_effect):
-        return -diff > k * se and -diff >= min_effect and diff < 0
+        return beyond(diff, se, k, min_effect, -1)
 
     @claim(f"03.{name}_detected", f"{what} changed beyond k standard errors (whatever its size)")
     def detected(*, diff, se, k, min_effect):
-        return abs(diff) > k * se and diff != 0
+        return beyond(diff, se, k)
 
     return rose, fell, detected
 

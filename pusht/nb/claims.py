@@ -172,7 +172,7 @@ def conflicts(records: list[dict], rel: float = 1e-9, se_rel: float = 1e-3) -> l
     zero); they must then carry the same standard error (to ``se_rel``), k and minimum effect, or one
     notebook would say "shrank" and "did not fall" of one drop. ``se_rel``: the gap's standard error
     comes from each start's total reward, the error size's from each start's two halves added
-    (``analysis.size_split``), which agree to float rounding (2e-4 relative seen), not to the bit;
+    (``split.size_split``), which agree to float rounding (2e-4 relative seen), not to the bit;
     a test whose standard error moves by 0.1% moves its verdict only where |t| is within 0.1% of k.
     Returns one line per conflict."""
     seen: dict[tuple, list] = {}

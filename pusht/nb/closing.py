@@ -12,7 +12,7 @@ Where every threshold comes from (no tolerance is typed in; the two physical con
 why they are what they are):
 
 * **A gap, and a change of it.** Every gap carries its standard error over the evaluation starts
-  (``imagination_gap_se_<span>``, from ``pusht.analysis.gap_split``). A change between two runs
+  (``imagination_gap_se_<span>``, from ``pusht.split.gap_split``). A change between two runs
   (round 0 and the last round, or a fix against the single model) is judged against
   sqrt(se_1^2 + se_2^2), the standard error of a difference of two independent means. The two runs
   use the SAME starts, and a start that is hard for one is likely hard for the other: the per-start
@@ -31,7 +31,7 @@ why they are what they are):
 * **Claims.** Every sentence that depends on the run is chosen by a registered claim
   (``pusht.nb.claims``, names "06.*"), so ``make claims`` records each one on every seed.
 * **Which world moved the gap.** The dream's and reality's ratings (reward per step) each carry
-  their own per-start standard error (``analysis.gap_split``), and each side's change is judged
+  their own per-start standard error (``split.gap_split``), and each side's change is judged
   against its own (:func:`sides`): reality varies far less from start to start than the dream, and
   the gap's yardstick would hide a real change of reality. Whether the dream came down for this
   policy or everywhere is read against the zero-action dream (:func:`policy_specific_words`).
@@ -51,7 +51,7 @@ why they are what they are):
 * **Which half of a gap is the larger.** A half is "the larger" only when the difference of the
   sizes, |yaw| - |position|, exceeds k of its standard errors and is at least the minimum reward
   effect (:func:`halves_order`); otherwise neither half is clearly the larger. Its standard error
-  is computed start by start (``analysis.size_split``). So is that of the **size of the error**,
+  is computed start by start (``split.size_split``). So is that of the **size of the error**,
   |position| + |yaw| (the gap can reach zero with both halves large and of opposite signs: they
   cancel): a fix must shrink it too (:func:`fix_verdict`), and the drift is judged by its size the
   same way. Where the halves share a sign the size is the gap's size with the gap's standard error,
@@ -75,7 +75,7 @@ from ..env import ARENA_HALF, CONTROL_DT, OBS_NAMES, SUCCESS_POS
 from ..selfcheck import Question
 from .claims import claim
 from .gap import NEAR, expert_control_words, register_expert_control
-from .stats import (LEVEL, MIN_REWARD_EFFECT, THIN_MARGIN, Test, clear_of_threshold, count_rise_p, k_for,
+from .stats import (LEVEL, MIN_REWARD_EFFECT, THIN_MARGIN, Test, beyond, clear_of_threshold, count_rise_p, k_for,
                     margin_words, outcome as _test_outcome)
 from . import figure
 
@@ -122,19 +122,19 @@ EX3_NOTE = ("\"Shrinks\" means: the gap's size |imagined minus real reward per s
 
 # --- the claims: every run-dependent sentence of notebook 06 is decided by one of these ---------------
 def _crossed(first: float, first_se: float, last: float, last_se: float, k: float) -> bool:
-    return first * last < 0 and abs(first) > k * first_se and abs(last) > k * last_se
+    return first * last < 0 and beyond(first, first_se, k) and beyond(last, last_se, k)
 
 
 def _size_fell(first, first_se, last, last_se, k, min_effect) -> bool:
     drop = abs(first) - abs(last)
     se = math.sqrt(first_se ** 2 + last_se ** 2)
-    return drop > k * se and drop >= min_effect and not _crossed(first, first_se, last, last_se, k)
+    return beyond(drop, se, k, min_effect, +1) and not _crossed(first, first_se, last, last_se, k)
 
 
 def _size_rose(first, first_se, last, last_se, k, min_effect) -> bool:
     rise = abs(last) - abs(first)
     se = math.sqrt(first_se ** 2 + last_se ** 2)
-    return rise > k * se and rise >= min_effect
+    return beyond(rise, se, k, min_effect, +1)
 
 
 @claim("06.gap_shrank", "the gap's size fell by more than k standard errors of the change and by at least the "
@@ -174,27 +174,27 @@ def change_down(*, diff, se, k, min_effect, quantity=""):
 @claim("06.dream_rosier", "the dream rated the policy above reality, beyond k standard errors and by at least the "
        "minimum effect", control="reality")
 def dream_rosier(*, value, se, k, min_effect):
-    return value > k * se and value >= min_effect
+    return beyond(value, se, k, min_effect, +1)
 
 
 @claim("06.dream_gloomier", "the dream rated the policy below reality, beyond k standard errors and by at least the "
        "minimum effect", control="reality")
 def dream_gloomier(*, value, se, k, min_effect):
-    return value < -k * se and -value >= min_effect
+    return beyond(value, se, k, min_effect, -1)
 
 
 @claim("06.yaw_half_clearly_larger", "the yaw half of the gap is larger in size than the position half, by more "
        "than k standard errors of the difference (per start) and by at least the minimum effect")
 def yaw_half_clearly_larger(*, position, yaw, diff_se, k, min_effect):
     diff = abs(yaw) - abs(position)
-    return diff > k * diff_se and diff >= min_effect
+    return beyond(diff, diff_se, k, min_effect, +1)
 
 
 @claim("06.position_half_clearly_larger", "the position half of the gap is larger in size than the yaw half, by "
        "more than k standard errors of the difference (per start) and by at least the minimum effect")
 def position_half_clearly_larger(*, position, yaw, diff_se, k, min_effect):
     diff = abs(position) - abs(yaw)
-    return diff > k * diff_se and diff >= min_effect
+    return beyond(diff, diff_se, k, min_effect, +1)
 
 
 @claim("06.halves_cancel", "the two halves have opposite signs and their sum is less than a given share of their "
@@ -219,13 +219,13 @@ def error_size_grew(*, first, first_se, last, last_se, k, min_effect):
 @claim("06.dream_rewards_expert", "the dream pays the scripted expert's actions more than zero actions, beyond k "
        "standard errors and by at least the minimum effect: it recognises success", control="zero actions")
 def dream_rewards_expert(*, signal, se, k, min_effect):
-    return signal > k * se and signal >= min_effect
+    return beyond(signal, se, k, min_effect, +1)
 
 
 @claim("06.dream_penalises_expert", "the dream pays the scripted expert's actions less than zero actions, beyond k "
        "standard errors and by at least the minimum effect", control="zero actions")
 def dream_penalises_expert(*, signal, se, k, min_effect):
-    return signal < -k * se and -signal >= min_effect
+    return beyond(signal, se, k, min_effect, -1)
 
 
 @claim("06.success_rose", "more real successes after the last round than in round 0", control="round 0")
@@ -305,7 +305,7 @@ class Change(Test):
 
 
 def _outcome(diff: float, bar: float) -> str:
-    if abs(diff) > bar and diff != 0:
+    if beyond(diff, bar, 1.0):
         return "up" if diff > 0 else "down"
     return "same"
 
@@ -508,7 +508,7 @@ def yaw_share(m: dict, span: str = "eval_horizon") -> float:
 def halves_order(position: float, yaw: float, diff_se: float, n_starts: int) -> str:
     """"yaw", "position" or "neither": which half of a gap is clearly the larger in size (claims
     ``06.yaw_half_clearly_larger``/``06.position_half_clearly_larger``): |yaw| - |position| beyond k
-    times its standard error over the starts (``diff_se``, ``analysis.size_split``) and at least the
+    times its standard error over the starts (``diff_se``, ``split.size_split``) and at least the
     minimum reward effect."""
     kw = dict(position=position, yaw=yaw, diff_se=diff_se, k=k_for(int(n_starts)), min_effect=MIN_REWARD_EFFECT)
     return "yaw" if yaw_half_clearly_larger(**kw) else "position" if position_half_clearly_larger(**kw) else "neither"
@@ -528,7 +528,7 @@ def _order(m: dict, span: str = "eval_horizon") -> str:
 def error_size(m: dict, span: str = "eval_horizon", what: str = "imagination_gap") -> tuple[float, float]:
     """The size of the dream's error over ``span``, |position half| + |yaw half| of the gap (what a
     gap near zero can hide when the halves cancel; ``what="gap_drift"``: of the drift), and its
-    standard error over the starts (``analysis.size_split``). Where the halves share a sign the size
+    standard error over the starts (``split.size_split``). Where the halves share a sign the size
     is the gap's size and its standard error the gap's: one quantity, one test."""
     return m[f"{what}_size_{span}"], m[f"{what}_size_se_{span}"]
 

@@ -19,7 +19,7 @@ from ..env import SUCCESS_ANG, SUCCESS_POS, obs_to_pose
 from ..selfcheck import Question
 from . import figure
 from .claims import claim, finite
-from .stats import LEVEL, MIN_REWARD_EFFECT, count_rise_p, k_for, welch
+from .stats import LEVEL, MIN_REWARD_EFFECT, beyond, count_rise_p, k_for, welch
 
 # The default config's number of held-out starts (cfg.eval_episodes), for metrics that do not say.
 DEFAULT_STARTS = Config.eval_episodes
@@ -65,7 +65,7 @@ TEST_WORDS = test_words()
 # and its true alternative otherwise. A reward-per-step difference counts when it is beyond k
 # (k_se: Student's t at the starts' degrees of freedom) standard errors (measured on the same starts) AND at least MIN_REWARD_EFFECT.
 def _beyond(value, se, k, min_effect) -> bool:
-    return finite(value, se, k, min_effect) and value > k * se and value >= min_effect and value > 0
+    return finite(value, se, k, min_effect) and beyond(value, se, k, min_effect, +1)
 
 
 @claim("04.term_positive", "a term of the gap is clearly positive: beyond k standard errors and the "
@@ -92,7 +92,7 @@ COUNT_P = (1 - LEVEL) / 2
 @claim("04.ex1_letter_decided", "Exercise 1's letter is decided beyond the noise: on every seed compared, the drift is "
        "farther from half the gap than k standard errors of their difference (start by start)", control="zero actions")
 def ex1_letter_decided(*, diffs, ses, ks):
-    return all(abs(d) > kk * se for d, se, kk in zip(diffs, ses, ks))
+    return all(beyond(d, se, kk) for d, se, kk in zip(diffs, ses, ks))
 
 
 @claim("04.real_success_beyond_chance", "on some seed the trained policy's real successes exceed those of a pusher "
@@ -150,7 +150,7 @@ def half_dominates(*, larger, smaller, se_diff, k, min_effect, which=""):
 
 @claim("04.term_beyond_noise", "a term of the gap is beyond k standard errors from zero (whatever its size)")
 def term_beyond_noise(*, value, se, k, what=""):
-    return finite(value, se, k) and abs(value) > k * se and value != 0
+    return finite(value, se, k) and beyond(value, se, k)
 
 
 @claim("04.dream_block_drifts_back", "the trained dream's block comes nearest inside the training "
@@ -545,13 +545,13 @@ def half_difference_se(rollouts: dict, steps: int | None) -> float:
     """The standard error over the starts of the gap's yaw half minus its position half, over the
     first ``steps`` steps (all for None): both halves are measured on the same starts, so the
     difference is a mean of per-start differences."""
-    from ..analysis import _per_start, _se
+    from ..split import per_start, se
 
     def half(part):
-        return _per_start(rollouts["dream_trained"], steps, part) - _per_start(rollouts["real_trained"], steps, part)
+        return per_start(rollouts["dream_trained"], steps, part) - per_start(rollouts["real_trained"], steps, part)
 
     x = half("yaw") - half("position")
-    return _se(x[~np.isnan(x)])
+    return se(x[~np.isnan(x)])
 
 
 def dominant_half(m: dict, span: str, se_diff: float | None = None, k: float | None = None) -> str | None:
@@ -588,13 +588,13 @@ def dominance_sentence(m: dict, span: str, se_diff: float | None = None, k: floa
     if which is None:
         big, a, b = ("yaw", y, p) if y >= p else ("position", p, y)
         d = a - b
-        beyond, enough = d > k * se and d != 0, d >= MIN_REWARD_EFFECT
+        clear, enough = beyond(d, se, k), d >= MIN_REWARD_EFFECT
         if a <= 0:
             why = f"the larger half, {big}, is not positive"
-        elif not beyond and not enough:
+        elif not clear and not enough:
             why = (f"their difference, {d:.3f}, is neither beyond {k:.2f} times {kind}, {se:.3f}, "
                    f"nor as large as the minimum effect {MIN_REWARD_EFFECT:.2f}")
-        elif not beyond:
+        elif not clear:
             why = (f"their difference, {d:.3f}, is within the noise: not beyond {k:.2f} times {kind}, "
                    f"{se:.3f}")
         else:

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Callable, NamedTuple
 
 from pusht.config import Config, make_config
-from pusht.nb import GRADING_ENV      # bound before pusht.nb imports this module
+from pusht.reference import GRADING_ENV
 
 
 class Session(NamedTuple):

@@ -69,10 +69,18 @@ def k_for(n_starts: int, level: float = LEVEL) -> float:
     return t_quantile(n_starts - 1, level)
 
 
+def beyond(diff: float, se: float, k: float, min_effect: float = 0.0, sign: int = 0) -> bool:
+    """THE verdict of every comparison in notebooks 03-06: ``diff`` is beyond ``k`` standard errors
+    ``se`` AND at least ``min_effect`` in size (0: whatever its size), upward for ``sign`` +1,
+    downward for -1, either way for 0. A difference of exactly 0 is never beyond; NaN never is."""
+    d = diff * sign if sign else abs(diff)
+    return d > k * se and d >= min_effect and d > 0
+
+
 def outcome(diff: float, bar: float, min_effect: float = 0.0) -> str:
     """"up" or "down" when ``|diff|`` exceeds ``bar`` (k standard errors, or a resolution) and is at
     least ``min_effect``; otherwise "same"."""
-    if abs(diff) > bar and abs(diff) >= min_effect and diff != 0:
+    if beyond(diff, bar, 1.0, min_effect):
         return "up" if diff > 0 else "down"
     return "same"
 
@@ -100,7 +108,7 @@ class Test:
     @property
     def detected(self) -> bool:
         """Beyond k standard errors: the noise does not explain it (whatever its size)."""
-        return abs(self.diff) > self.k * self.se and self.diff != 0
+        return beyond(self.diff, self.se, self.k)
 
     @property
     def matters(self) -> bool:

@@ -2,16 +2,16 @@
 
 Learners never need this module. The autograder (``autograde/probe.py``) starts it once per
 grading task, inside a sandbox of its own, with a copy of this package in which the exercises'
-implementations only raise (``pusht.grading``), and talks to it over its standard streams:
+implementations only raise (``pusht.grader.probes``), and talks to it over its standard streams:
 
-    python -P -m pusht.probe_server
+    python -P -m pusht.grader.probe_server
 
 Each line on its standard input is a request (JSON) from the grader: the statements that define
 the graded function (the student's cells above the test cell, as ``autograde/probe.py`` chose
 them), the function's name, the probe cases, the nonce, any function the cases hand over
 (``helpers``, source text) and a time limit. For each, it forks a child that executes the
 statements in a fresh ``__main__``, runs the cases on the function and writes the encoded results
-(``pusht.grading.encode_results``) into a pipe of its own; the server reads at most
+(``pusht.grader.probes.encode_results``) into a pipe of its own; the server reads at most
 ``MAX_RESULTS`` bytes from it before the limit, kills the child's process group, and answers on
 its standard output with one header line and those bytes. The grader decodes them
 (``decode_results``) and judges them; nothing the child writes is trusted. Then every other
@@ -53,7 +53,7 @@ def warm(statements: list[str]) -> None:
     import numpy  # noqa: F401
     import torch  # noqa: F401
 
-    import pusht.grading  # noqa: F401
+    import pusht.grader.probes  # noqa: F401
     for src in statements:
         try:
             exec(compile(src, "<warm-up>", "exec"), {"__name__": "__warm__"})
@@ -169,7 +169,7 @@ def _child(req: dict, w: int) -> None:
     import resource
     import types
 
-    from pusht import grading
+    from pusht.grader import probes as grading
 
     try:
         os.setsid()
@@ -272,7 +272,7 @@ def _sweep() -> None:
 
 
 def serve(stdin, stdout) -> None:
-    from pusht.grading import MAX_RESULTS
+    from pusht.grader.probes import MAX_RESULTS
 
     while True:
         line = stdin.readline(MAX_REQUEST)

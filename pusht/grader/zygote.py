@@ -6,7 +6,7 @@ importing torch and this package before its first cell did anything (``benchmark
 grading_wallclock.txt``). The autograder (``autograde/sandbox.py``) instead starts this process
 once per student, *inside* that student's sandbox, and asks it for each notebook's kernel:
 
-    python -m pusht.zygote READY     (standard input: a Unix socket that brings the listening socket)
+    python -m pusht.grader.zygote READY     (standard input: a Unix socket that brings the listening socket)
 
 It imports what the chapter's notebooks import (and nothing runs: no torch op, no thread, no
 event loop, so forking stays safe), creates the file ``READY`` (the grader waits for it), and for
@@ -88,7 +88,7 @@ def preload() -> None:
     # every module of this package, found rather than listed, so that one added later is preloaded
     # too (walk_packages imports the subpackages it descends into; one that fails is skipped here)
     ours = [m.name for m in pkgutil.walk_packages(pusht.__path__, "pusht.", onerror=lambda name: None)
-            if m.name != "pusht.zygote"]
+            if not m.name.startswith("pusht.grader")]      # the grader's runtime: never a kernel's
     for name in ["ipykernel.kernelapp", "ipykernel.ipkernel", "IPython.display", "numpy", "torch",
                  "torch.nn.functional", "matplotlib.pyplot", "tqdm.auto", "pymunk", *ours]:
         try:
@@ -232,7 +232,7 @@ def serve(listener: socket.socket, ready: str | None = None) -> None:
         try:
             os.close(os.open(ready, os.O_WRONLY | os.O_CREAT | os.O_NOFOLLOW | os.O_NONBLOCK, 0o644))
         except OSError as e:       # the grader waits for it in vain, then finds it served all the same
-            print(f"pusht.zygote: cannot create {ready}: {e}", file=sys.stderr)
+            print(f"pusht.grader.zygote: cannot create {ready}: {e}", file=sys.stderr)
     kernel: tuple[int, socket.socket] | None = None     # (pid, the requester's connection)
 
     def end(kernel, code):
@@ -313,13 +313,13 @@ def main(argv=None) -> int:
     _prctl_dumpable(0)                   # before anything else: no kernel may ever read or trace this
     argv = sys.argv[1:] if argv is None else argv
     if len(argv) != 1:
-        print("usage: python -m pusht.zygote READY  (standard input: a Unix socket bringing the "
+        print("usage: python -m pusht.grader.zygote READY  (standard input: a Unix socket bringing the "
               "listening socket)", file=sys.stderr)
         return 2
     try:
         listener = receive_listener(0)
     except (OSError, ValueError) as e:
-        print(f"pusht.zygote: {e}", file=sys.stderr)
+        print(f"pusht.grader.zygote: {e}", file=sys.stderr)
         return 2
     devnull = os.open(os.devnull, os.O_RDONLY)
     os.dup2(devnull, 0)
