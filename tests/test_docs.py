@@ -137,6 +137,13 @@ def test_the_map_names_no_file_that_is_gone():
     assert not gone, f"docs/developers.md's map names files that do not exist: {gone}"
 
 
+@pytest.mark.parametrize("page", pages(), ids=lambda p: p.relative_to(ROOT).as_posix())
+def test_every_python_file_a_page_names_exists(page):
+    # prose that names `pusht/zygote.py` after the module moved would send a reader nowhere
+    gone = sorted({p for p in PY_PATH.findall(page.read_text()) if not (ROOT / p).exists()})
+    assert not gone, f"{page.relative_to(ROOT)} names Python files that do not exist: {gone}"
+
+
 def test_the_checks_themselves():
     # GitHub's anchors, as links to these pages spell them
     assert slug("Every sentence about your run is checked") == "every-sentence-about-your-run-is-checked"
