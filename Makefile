@@ -152,7 +152,7 @@ grade: setup sandbox icu
 
 # The Gradescope autograder (autograde/gradescope.py): setup.sh and run_autograder at the zip's root,
 # what grading needs of this package at the commit built (no solutions, tests or site builder). Upload
-# it on the assignment's Configure Autograder page (README, "Grading on Gradescope"). OUT defaults to
+# it on the assignment's Configure Autograder page (docs/gradescope.md). OUT defaults to
 # runs/gradescope/autograder.zip. By default the bundle grades nothing where no sandbox starts;
 # CONFINE=allow builds one that grades there unconfined, with a warning now and in every result.
 CONFINE ?= require

@@ -7,7 +7,7 @@ SUBMISSIONS is a .zip as the LMS hands it over, or a folder: each student's down
 folders (``intake`` says exactly what is accepted and what is refused).
 
 This module is the front: ``grade_class`` and the command line. Student code is untrusted
-(README, "Student code is treated as hostile"); each step is a module of this package:
+(docs/grader.md, "Student code is treated as hostile"); each step is a module of this package:
 
 1. ``intake``: the download read in memory (hostile names refused, nothing written outside the
    course), LMS ids normalised, the newest of several uploads picked, look-alike ids noted;
@@ -255,7 +255,7 @@ def main(argv=None) -> int:
     p.add_argument("--timeout", type=int, default=120, help="seconds per cell before it is interrupted")
     p.add_argument("--jobs", type=int, default=None, help="grading tasks at once (default: one per core); fewer students than that split their notebooks")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="grade on a Dask cluster, e.g. tcp://10.0.0.5:8786 (README: 'Grading a large class')")
+                   help="grade on a Dask cluster, e.g. tcp://10.0.0.5:8786 (docs/scale.md: 'Beyond one machine: Dask')")
     p.add_argument("--regrade", action="store_true",
                    help="grade again students whose submissions did not change since the last run")
     p.add_argument("--share", choices=("auto", "yes", "no"), default="auto",

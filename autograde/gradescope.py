@@ -25,7 +25,7 @@ the source of that page: github.com/gradescope/autograder_samples, docs/specs.md
   instructor's notebooks with every solution taken out (``grading_source``: the hidden tests and
   every other cell kept), of which nbgrader makes the same release and gradebook (``build`` checks
   that, ``same_assignment``); the verdicts come from ``autograde/checks.py`` against the package's
-  own implementations, never from the solutions. Not the site builder, the tests, the README.
+  own implementations, never from the solutions. Not the site builder, the tests, the README or docs/.
   ``gradescope.json`` records the commit (and any files that differed from it) with the build's
   settings. ``requirements-gradescope.txt``: what grading needs of ``requirements.txt``, with its
   pins (the loose ones pinned to the versions the building venv holds, the ones this course's CI
@@ -74,7 +74,7 @@ fails the image build where that is certain (no bubblewrap, or one older than 0.
 default Ubuntu 22.04 image). Only a bundle built with ``--confine allow`` (``make gradescope
 CONFINE=allow``) grades there unconfined: the build prints a warning, and every student's
 ``results.json`` says how it was graded (a visible 0-point test first, and when unconfined the top
-of the output). What that means on Gradescope is in the README ("Grading on Gradescope").
+of the output). What that means on Gradescope is in docs/gradescope.md ("Confinement on Gradescope").
 
 The root of the container layout is ``$GRADESCOPE_ROOT`` (default ``/autograder``), so tests
 emulate it in a temporary folder. How otter-grader builds its Gradescope zip was read for
@@ -111,8 +111,8 @@ CONFINE = ("require", "allow")        # build --confine: require (the default) g
 REQUIREMENTS = "requirements-gradescope.txt"
 # What grading reads of the working tree: the course's settings, the students' package (the kernels
 # import it) and the grader. Not the solutions (the bundle carries GRADING_SOURCE instead: see
-# grading_source), the site builder, the tests, the README or requirements.txt (setup.sh installs
-# from REQUIREMENTS).
+# grading_source), the site builder, the tests, the README and docs/, or requirements.txt (setup.sh
+# installs from REQUIREMENTS).
 VENDORED = ("pyproject.toml", "course.yaml", "pusht", "autograde")
 # of those, what no grading step imports or reads: the test classes (autograde/classes: hostile
 # hand-ins, honest variants, LMS downloads), the command-line tools for manual grades and Dask
@@ -361,7 +361,7 @@ def grading_requirements(text: str) -> str:
 def setup_script(torch: str) -> str:
     return f"""#!/usr/bin/env bash
 # Gradescope runs this once, as root, while it builds the autograder's image (autograde/gradescope.py
-# wrote it; README, "Grading on Gradescope"). Everything grading needs is installed here; grading
+# wrote it; docs/gradescope.md). Everything grading needs is installed here; grading
 # itself fetches nothing.
 set -euo pipefail
 SRC="$(cd "$(dirname "${{BASH_SOURCE[0]}}")" && pwd)"         # /autograder/source
@@ -399,7 +399,7 @@ chmod -R a+rX /opt/pusht-python "$VENV" "$COURSE/pusht"        # the students' k
 RUN_AUTOGRADER = """#!/usr/bin/env bash
 # Gradescope runs this for every submission, as root, in /autograder, in a container of its own:
 # it grades /autograder/submission and writes /autograder/results/results.json
-# (autograde/gradescope.py; README, "Grading on Gradescope").
+# (autograde/gradescope.py; docs/gradescope.md).
 export GRADESCOPE_ROOT="${GRADESCOPE_ROOT:-/autograder}"
 cd "$GRADESCOPE_ROOT" || exit 1
 exec "$GRADESCOPE_ROOT/source/course/.venv/bin/python" -P -m autograde.gradescope run

@@ -3,7 +3,7 @@
     record = guarantees.of_run(confine, why, limits, scheduler)     # grade_class calls it first
     for line in guarantees.lines(record): log(line)
 
-The README ("Student code is treated as hostile") lists what confines a student's code. Not all of
+docs/grader.md ("Student code is treated as hostile") lists what confines a student's code. Not all of
 it holds everywhere: without bubblewrap nothing is confined; graded as an ordinary user, kernels
 run as that user's uid in a user namespace, the sockets folder is never handed back to root and no
 memory cgroup is made. A run used to say only the first. Now each run works out, for the host that
@@ -192,7 +192,8 @@ def lines(record: list[Guarantee]) -> list[str]:
     """What the run prints first: a heading, then one plain line per guarantee."""
     off = [g.name for g in record if not g.held]
     head = ("guarantees of this run: " + ("all held" if not off else f"{len(off)} of {len(record)} NOT held "
-                                          f"({', '.join(off)})") + " (README: 'Student code is treated as hostile')")
+                                          f"({', '.join(off)})")
+            + " (docs/grader.md: 'Student code is treated as hostile')")
     return [head] + [f"  {g.line()}" for g in record]
 
 

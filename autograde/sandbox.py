@@ -464,7 +464,8 @@ def lock_sockets(folder: Path) -> None:
     """Once a kernel has made its sockets and the grader has connected to them, before any of the
     student's code runs (nbclient's ``on_notebook_start``): ``folder`` back to root, read-only to
     the kernel, so that it cannot put a link where the grader's ZeroMQ reconnects (it would follow
-    it, as root). Where grading does not run as root nothing changes hands (README)."""
+    it, as root). Where grading does not run as root nothing changes hands
+    (docs/grader.md, "Student code is treated as hostile")."""
     if os.geteuid() == 0:
         os.lchown(folder, 0, 0)
         os.chmod(folder, 0o755)
@@ -608,7 +609,8 @@ class MemoryCgroup:
     tmpfs filled to its size, are not bounded by it. The kernel charges every page a process in the
     group touches, tmpfs pages included, to the group, and kills a process in it, never outside, once
     the group is over its limit. Where no group can be made (not root, no writable hierarchy),
-    ``make`` returns None and the sandbox runs with the per-process limits only (README)."""
+    ``make`` returns None and the sandbox runs with the per-process limits only
+    (docs/grader.md, "Student code is treated as hostile")."""
 
     FOLDER = "pusht-grading"
 

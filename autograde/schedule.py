@@ -58,7 +58,7 @@ def run_dask(tasks: list, scheduler, submit_args, on_done, log=print) -> None:
         if bad:
             raise RuntimeError("these Dask workers cannot grade: " + "; ".join(f"{w}: {why}" for w, why in bad.items())
                                + ". Start each worker from a checkout of the course after `make setup`, with "
-                               "`--preload autograde.dask_preload` (README, 'Grading a large class').")
+                               "`--preload autograde.dask_preload` (docs/scale.md, 'Beyond one machine: Dask').")
         futures, scattered = {}, {}
 
         def once(x):           # large arguments (the course, the shared stages) go to every worker once

@@ -291,7 +291,11 @@ def _same_unit(key: str) -> tuple:
     return next((g for g in UNITS if key in g), (key,))
 
 
+# Where the numbers are shown: the README's headline (a few rows) and docs/results.md (every table),
+# each between its markers, rendered from meta.yaml and never typed (tests/test_reproduce.py).
 README = ROOT / "README.md"
+RESULTS_PAGE = ROOT / "docs" / "results.md"
+HEADLINE_START, HEADLINE_END = "<!-- headline:start", "<!-- headline:end -->"
 RESULTS_START, RESULTS_END = "<!-- results:start", "<!-- results:end -->"
 ROWS = [("imagined_return_per_step", "imagined reward/step (dream)", "+.3f"),
         ("real_return_per_step", "real reward/step (pymunk)", "+.3f"),
@@ -323,24 +327,41 @@ ROWS = [("imagined_return_per_step", "imagined reward/step (dream)", "+.3f"),
         ("imagined_reward_last20_train", "imagined reward/step, last 20 iterations", "+.3f")]
 
 
-def render_results(meta: dict) -> str:
-    """The README's results block, rendered from meta.yaml (never typed)."""
+# The README's few rows, in ROWS' order: the same policy in two worlds, and the share of the gap that
+# is the model's own drift.
+HEADLINE_ROWS = ("imagined_return_per_step", "real_return_per_step", "imagination_gap", "real_success_rate",
+                 "imagination_gap_train_horizon", "gap_drift_train_horizon")
+
+
+def _seeds_table(meta: dict, rows) -> list[str]:
+    """The seeds' table, one line per (key, title, format) of ``rows``, the chapter page's seed 0 beside."""
     seeds = list(meta["seeds"])
     page = meta["page"]
-    plat = meta["platform"]
-    where = (f"{plat['cpu_model']}, {plat['cpu_capability']}, {plat['mkl']} path {plat['mkl_path']}, "
-             f"torch {plat['torch']}" if "mkl_path" in plat else
-             f"{plat['cpu_capability']} CPU, torch {plat['torch']}")
-    lines = [f"Default config, {meta['seeds'][seeds[0]]['eval_episodes']} held-out starts per seed "
-             f"({where}):", "",
-             "| measured | " + " | ".join(f"seed {s}" for s in seeds) + " | chapter page, seed 0 |",
+    lines = ["| measured | " + " | ".join(f"seed {s}" for s in seeds) + " | chapter page, seed 0 |",
              "| --- |" + " --- |" * (len(seeds) + 1)]
-    for key, title, fmt in ROWS:
+    for key, title, fmt in rows:
         ref = page.get(key, {})
         ref = ref.get("seed0", ref.get("about", "")) if isinstance(ref, dict) else ""
         ref = format(ref, fmt) if isinstance(ref, (int, float)) and not isinstance(ref, bool) else ref
         lines.append(f"| {title} | " + " | ".join(format(meta["seeds"][s][key], fmt) for s in seeds)
                      + f" | {ref} |")
+    return lines
+
+
+def render_headline(meta: dict) -> str:
+    """The README's headline: a few rows of docs/results.md's first table."""
+    return "\n".join(_seeds_table(meta, [r for r in ROWS if r[0] in HEADLINE_ROWS]))
+
+
+def render_results(meta: dict) -> str:
+    """docs/results.md's tables, rendered from meta.yaml (never typed)."""
+    seeds = list(meta["seeds"])
+    plat = meta["platform"]
+    where = (f"{plat['cpu_model']}, {plat['cpu_capability']}, {plat['mkl']} path {plat['mkl_path']}, "
+             f"torch {plat['torch']}" if "mkl_path" in plat else
+             f"{plat['cpu_capability']} CPU, torch {plat['torch']}")
+    lines = [f"Default config, {meta['seeds'][seeds[0]]['eval_episodes']} held-out starts per seed "
+             f"({where}):", ""] + _seeds_table(meta, ROWS)
     if "tolerance" in meta:
         band = meta["tolerance"]["band"]
         lines += ["", "On another platform a fresh seed 0 should land within these bands of the seed-0 "
@@ -407,10 +428,13 @@ def horizon_table(sweep: dict) -> dict:
     return dict(sorted(out.items()))
 
 
-def readme_with_results(meta: dict) -> str:
-    from release import splice_readme
+def pages_with_results(meta: dict) -> dict[Path, str]:
+    """{path: its text with the numbers rendered from ``meta``}: the README's headline and
+    docs/results.md's tables."""
+    from release import splice
 
-    return splice_readme(RESULTS_START, RESULTS_END, render_results(meta))
+    return {README: splice(README, HEADLINE_START, HEADLINE_END, render_headline(meta)),
+            RESULTS_PAGE: splice(RESULTS_PAGE, RESULTS_START, RESULTS_END, render_results(meta))}
 
 
 def write_meta(record: dict, out: Path) -> None:
@@ -419,8 +443,9 @@ def write_meta(record: dict, out: Path) -> None:
     out.write_text(header + yaml.safe_dump(record, sort_keys=False, width=100))
     print(f"wrote {out}")
     if out == ROOT / "meta.yaml":
-        README.write_text(readme_with_results(yaml.safe_load(out.read_text())))
-        print(f"updated the results in {README}")
+        for path, text in pages_with_results(yaml.safe_load(out.read_text())).items():
+            path.write_text(text)
+            print(f"updated the results in {path}")
 
 
 def main(argv=None):

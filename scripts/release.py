@@ -130,12 +130,13 @@ def readme_with_table(names) -> str:
         rows.append(f"| [{title}](notebooks/{name}) | "
                     f"[![Open In Colab](https://colab.research.google.com/assets/colab-badge.svg)]({colab_url(name)}) "
                     f"[![Binder](https://mybinder.org/badge_logo.svg)]({binder_url(name)}) |")
-    return splice_readme(TABLE_START, TABLE_END, "\n".join(rows))
+    return splice(README, TABLE_START, TABLE_END, "\n".join(rows))
 
 
-def splice_readme(start: str, end: str, body: str) -> str:
-    """README.md with the generated block between the ``start`` marker line and ``end`` replaced."""
-    head, rest = README.read_text().split(start, 1)
+def splice(path: Path, start: str, end: str, body: str) -> str:
+    """The Markdown file ``path`` with the generated block between the ``start`` marker line and
+    ``end`` replaced (the README's notebook table and headline, docs/results.md's tables)."""
+    head, rest = path.read_text().split(start, 1)
     marker_line, _ = rest.split("\n", 1)
     _, tail = rest.split(end, 1)
     return head + start + marker_line + "\n" + body + "\n" + end + tail

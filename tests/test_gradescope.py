@@ -89,7 +89,7 @@ def test_the_zip_is_laid_out_as_gradescope_asks(bundle):
     assert set(course) >= {p.relative_to(ROOT).as_posix() for p in (ROOT / "pusht").rglob("*.py")}
     # only what grading needs: no solutions, no test classes, no site builder, no tests, no mark scheme
     unneeded = ("solutions/", "autograde/classes/", "chapter_site/", "tests/", "scripts/", "notebooks/", "text/",
-                "benchmarks/", "README.md", "requirements.txt", "autograde/mark_scheme.yaml",
+                "benchmarks/", "README.md", "docs/", "requirements.txt", "autograde/mark_scheme.yaml",
                 "autograde/manual_grade.py", "autograde/dask_preload.py")
     assert not [n for n in infos if n.startswith(unneeded) or n.startswith(tuple(f"course/{u}" for u in unneeded))]
     assert not [n for n in course if "__pycache__" in n or n.endswith((".pyc", ".db")) or n.startswith("autograde/source/")]

@@ -31,12 +31,13 @@ ROOT = Path(__file__).resolve().parents[1]
 META = yaml.safe_load((ROOT / "meta.yaml").read_text())
 sys.path.insert(0, str(ROOT / "scripts"))
 from record_meta import (COUNTS, HEADLINE, acceptance, code_path, comparison_line, out_of_band,  # noqa: E402
-                         platform_differences, readme_with_results)
+                         pages_with_results, platform_differences)
 
 
-def test_readme_results_are_rendered_from_meta():
-    assert (ROOT / "README.md").read_text() == readme_with_results(META), \
-        "README results differ from meta.yaml: run `make meta` (or re-render them)"
+def test_results_in_the_readme_and_docs_are_rendered_from_meta():
+    for path, text in pages_with_results(META).items():
+        assert path.read_text() == text, \
+            f"{path.relative_to(ROOT)}: results differ from meta.yaml: run `make meta` (or re-render them)"
 
 
 def test_meta_was_recorded_at_todays_default_config():
