@@ -1,4 +1,4 @@
-"""The class report: one page that says what to re-teach, ``autograde/class_report.html``.
+"""The class report: one page that says what to re-teach, ``course/class_report.html``.
 
     write_class_report(course, report, submitted=None) -> Path
 

@@ -135,7 +135,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .class_report import CSP, _t, display_name, gradebook_rows, hint_of
-from .course import ASSIGNMENT, HERE, NOTEBOOKS
+from .course import ASSIGNMENT, COURSE_DIR, NOTEBOOKS
 from .files import read_capped
 from .gradebook import read_manual
 from .lms_export import _ident, _lms, _num, _write_atomic, lms_settings, read_standings
@@ -633,7 +633,7 @@ def _readme(students, packages, generic, left) -> str:
 # --- the command line -------------------------------------------------------------------------------
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--course", type=Path, default=HERE, help="nbgrader course folder (default: autograde/)")
+    p.add_argument("--course", type=Path, default=COURSE_DIR, help="the graded course folder (default: course/)")
     args = p.parse_args(argv)
     saved = args.course / RETURN_DIR / REPORT_JSON
     if not saved.is_file():

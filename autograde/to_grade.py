@@ -5,7 +5,7 @@
 
 then, once the ``score`` (and ``comment``) cells are filled in a spreadsheet,
 
-    python -m autograde.manual_grade --from-csv autograde/to_grade.csv
+    python -m autograde.manual_grade --from-csv course/to_grade.csv
 
 applies every filled row at once (``manual_grade.apply_sheet``). This module is the sheet: its
 columns, writing it from the gradebook and the autograded notebooks, and reading it back.
