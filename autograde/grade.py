@@ -46,11 +46,12 @@ from .class_report import write_class_report
 from .course import ASSIGNMENT, COURSE_DIR, HERE, NOTEBOOKS, _one_run_per_course, course_bundle, prepare_course
 from .feedback import generate_feedback, sanitize_feedback_sources
 from .gradebook import clear_submissions, export, record
-from .lms_export import spreadsheet_text, write_lms_exports
+from .lms_export import write_lms_exports
 from .lms_feedback import write_feedback_return
 from .prepare import prepare_student
 from .schedule import _split, default_jobs, run_tasks
 from .stages import SHARE_FROM, grader_fingerprint, shared_stages, submission_fingerprint
+from .text import spreadsheet_text
 from .to_grade import write_to_grade
 
 

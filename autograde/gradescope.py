@@ -649,7 +649,7 @@ def stage(submission: Path, dest: Path) -> tuple[list[str], list[str]]:
     from .course import NOTEBOOKS, SOURCE
     from .identify import Identifier
 
-    names = intake._Names(NOTEBOOKS)     # the intake's own reading of a file name
+    names = intake.NotebookNames(NOTEBOOKS)     # the intake's own reading of a file name
     identifier = None
     dest.mkdir(parents=True, exist_ok=True)
     found: dict[str, list] = {}
@@ -671,7 +671,7 @@ def stage(submission: Path, dest: Path) -> tuple[list[str], list[str]]:
             if match is not None and match.notebook:
                 notes.append(f"{rel}: graded as {match.notebook}: its name names no notebook of this assignment, "
                              f"but {match.words()}")
-                parsed = (None, match.notebook, intake._reupload(base)[1])
+                parsed = (None, match.notebook, intake.reupload(base)[1])
             else:
                 why = f": {match.words()}" if match is not None else ""
                 notes.append(f"{rel}: not a notebook of this assignment ({names.expected}), by its name or by "

@@ -186,7 +186,7 @@ def _apply(course: Path, entries: list[Entry], jobs: int, log, unchanged_skip: b
     from nbgrader.api import Gradebook, MissingEntry
 
     from .gradebook import export_csv, read_manual
-    from .lms_export import _write_atomic
+    from .text import write_atomic
     from .to_grade import mark_scheme
 
     manual = read_manual(course)
@@ -212,7 +212,7 @@ def _apply(course: Path, entries: list[Entry], jobs: int, log, unchanged_skip: b
         w = csv.DictWriter(buf, FIELDS, extrasaction="ignore")
         w.writeheader()
         w.writerows(manual[k] for k in sorted(manual))
-        _write_atomic(course / "manual_grades.csv", buf.getvalue().encode("utf-8"))
+        write_atomic(course / "manual_grades.csv", buf.getvalue().encode("utf-8"))
         for e in applied:
             grade = grades[(e.student, e.notebook, e.grade_id)]
             grade.manual_score = e.score
