@@ -126,6 +126,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from .course import ASSIGNMENT, COURSE, COURSE_ID
+from .lms_layouts import TITLE
 from .text import clean_text, count, digits, ident, num, spreadsheet_text, write_atomic, write_csv
 
 CANVAS_FILE = "canvas_import.csv"
@@ -145,8 +146,6 @@ MOODLE_PARTICIPANT = "Participant "
 MOODLE_USER_FIELDS = {"username": "Username", "useridnumber": "ID number", "useremail": "Email address",
                       "userid": "User ID"}
 MOODLE_IDENTIFIERS = ("participant", *MOODLE_USER_FIELDS)
-
-SYSTEMS = {"canvas": "Canvas", "moodle": "Moodle", "blackboard": "Blackboard"}
 
 DEFAULTS = {
     "points_possible": None,
@@ -330,7 +329,7 @@ def write_lms_exports(course: Path, report: dict, *, settings: dict | None = Non
             if (course / file).is_file():
                 (course / file).unlink()
                 warnings.append(f"removed {file}, left by an earlier grading in this course folder: this "
-                                f"download is not {SYSTEMS[system]}'s")
+                                f"download is not {TITLE[system]}'s")
     if not sheets:
         warnings.append("no import file written: the download is in no LMS's own layout (Canvas, Moodle, Blackboard) "
                         "and course.yaml's lms.canvas.student_ids_are / lms.moodle.student_ids_are do not say "
@@ -387,7 +386,7 @@ def _canvas_sheet(report, standings, cfg, lms_max, lms_points) -> _Sheet:
             else:
                 key = ("ID", uid)
         elif lms:
-            why = f"no Canvas user id: the hand-in came from {SYSTEMS.get(lms['system'], lms['system'])}"
+            why = f"no Canvas user id: the hand-in came from {TITLE.get(lms['system'], lms['system'])}"
         elif c["student_ids_are"]:
             key = (CANVAS_SIS[c["student_ids_are"]], s)
             if "~" in s:
@@ -437,7 +436,7 @@ def _moodle_sheet(report, standings, cfg, lms_max, lms_points, now) -> _Sheet:
                 else:
                     key = ("participant", pid)
             elif lms:
-                why = f"no Moodle participant number: the hand-in came from {SYSTEMS.get(lms['system'], lms['system'])}"
+                why = f"no Moodle participant number: the hand-in came from {TITLE.get(lms['system'], lms['system'])}"
             else:
                 why = ("no Moodle participant number: the file name carried only a student id (the worksheet "
                        "needs Moodle's own download; or set lms.moodle.identifier to the user field these ids are)")
@@ -452,7 +451,7 @@ def _moodle_sheet(report, standings, cfg, lms_max, lms_points, now) -> _Sheet:
                            f"the gradebook import cannot match (it is not the user id); set "
                            f"lms.moodle.identifier: participant to write the assignment's grading worksheet")
             elif lms:
-                why = f"no Moodle {label}: the hand-in came from {SYSTEMS.get(lms['system'], lms['system'])}"
+                why = f"no Moodle {label}: the hand-in came from {TITLE.get(lms['system'], lms['system'])}"
             elif m["student_ids_are"] == user_field:
                 key = (user_field, s)
                 if "~" in s:
