@@ -4,7 +4,8 @@
 #   make run      the pipeline alone, seed 0, default config -> runs/seed0/metrics.json
 #   make release  regenerate the student notebooks/ from solutions/ (nbgrader)
 #   make grade    grade a class: make grade SUBMISSIONS=lms_download.zip [SCHEDULER=tcp://host:8786] [REGRADE=1]
-#                 -> autograde/grades.csv, report.csv, canvas_import.csv, moodle_import.csv, class_report.html
+#                 [COURSE=dir] -> course/ (or COURSE): grades.csv, report.csv, canvas_import.csv,
+#                 moodle_import.csv, class_report.html, to_grade.csv, feedback/, feedback_return/
 #   make gradescope  the Gradescope autograder zip -> runs/gradescope/autograder.zip [OUT=path.zip]
 #                 [CONFINE=allow: grade unconfined where no sandbox starts; default: require one]
 #   make icu      PyICU, which grading needs to find look-alike student ids (make test and make grade run it)
@@ -148,7 +149,7 @@ release: setup
 
 grade: setup sandbox icu
 	@test -n "$(SUBMISSIONS)" || (echo "usage: make grade SUBMISSIONS=path/to/submissions.zip" && exit 2)
-	$(PY) -m autograde.grade "$(SUBMISSIONS)" $(if $(SCHEDULER),--scheduler $(SCHEDULER)) $(if $(REGRADE),--regrade)
+	$(PY) -m autograde.grade "$(SUBMISSIONS)" $(if $(COURSE),--course "$(COURSE)") $(if $(SCHEDULER),--scheduler $(SCHEDULER)) $(if $(REGRADE),--regrade)
 
 # The Gradescope autograder (autograde/gradescope.py): setup.sh and run_autograder at the zip's root,
 # what grading needs of this package at the commit built (no solutions, tests or site builder). Upload

@@ -1,4 +1,5 @@
-"""The course's grader, one idea per module, and its nbgrader course folder (this folder).
+"""The course's grader, one idea per module. What it writes goes to the course folder
+(``course.COURSE_DIR``, ``course/`` at the repository's root), never into this package.
 
 The front is ``grade`` (``python -m autograde.grade``, ``grade_class``); ``grade``'s docstring says
 which module does which step. ``classes`` holds the test classes (synthetic, hostile and honest

@@ -1,4 +1,4 @@
-"""The class report: one page that says what to re-teach, ``autograde/class_report.html``.
+"""The class report: one page that says what to re-teach, ``course/class_report.html``.
 
     write_class_report(course, report, submitted=None) -> Path
 
@@ -420,7 +420,7 @@ def _options(exercise: str) -> dict:
 
 
 # --- the page --------------------------------------------------------------------------------------
-def _t(value, cap: int = MAX_TEXT) -> str:
+def page_text(value, cap: int = MAX_TEXT) -> str:
     """Any text for the page: capped, invisible and control characters spelled as code points, escaped."""
     s = value if isinstance(value, str) else str(value)
     if len(s) > cap:
@@ -438,11 +438,11 @@ def _t(value, cap: int = MAX_TEXT) -> str:
 def _id(student: str) -> str:
     """A student id as the page shows it: escaped, isolated from the text around it, and spelled
     as code points when it holds anything but printable ASCII."""
-    shown = f'<bdi class="id">{_t(student, 128)}</bdi>'
+    shown = f'<bdi class="id">{page_text(student, 128)}</bdi>'
     if all(" " < ch < "\x7f" for ch in student):
         return shown
     spelled = "".join(ch if " " < ch < "\x7f" else f"[U+{ord(ch):04X}]" for ch in student[:128])
-    return f'{shown} <span class="spelled">({_t(spelled, 1200)})</span>'
+    return f'{shown} <span class="spelled">({page_text(spelled, 1200)})</span>'
 
 
 def display_name(rep) -> str | None:
@@ -458,7 +458,7 @@ def display_name(rep) -> str | None:
 
 def _who(student: str, name: str | None) -> str:
     """The id, and the name beside it where there is one (both escaped)."""
-    return _id(student) + (f' <span class="name">{_t(name, 128)}</span>' if name and name != student else "")
+    return _id(student) + (f' <span class="name">{page_text(name, 128)}</span>' if name and name != student else "")
 
 
 def _n(n: int, word: str) -> str:
@@ -476,7 +476,7 @@ def _png(fig) -> str:
 
 
 def _img(fig, alt: str, name: str) -> str:
-    return f'<img class="figure" data-figure="{name}" alt="{_t(alt, 1000)}" src="data:image/png;base64,{_png(fig)}">'
+    return f'<img class="figure" data-figure="{name}" alt="{page_text(alt, 1000)}" src="data:image/png;base64,{_png(fig)}">'
 
 
 def _figure(w: float, h: float, left: float = 0.6, bottom: float = 0.55, right: float = 0.15, top: float = 0.25,
@@ -524,14 +524,14 @@ def _cells_section(d: dict) -> str:
     for c in cells:
         failing = c["partial"] + c["zero"]
         top = c["hints"].most_common(1)
-        hint = (f'{_t(top[0][0], 600)} <span class="muted">({top[0][1]} of {failing} who lost points)</span>'
+        hint = (f'{page_text(top[0][0], 600)} <span class="muted">({top[0][1]} of {failing} who lost points)</span>'
                 if top and failing else "")
         if c["kind"] == "graded by hand":
             hint = f'{c["pending"]} awaiting a manual grade' if c["pending"] else ""
         body.append(
-            f'<tr data-notebook="{_t(c["notebook"])}" data-cell="{_t(c["cell"])}" data-graded="{c["graded"]}" '
+            f'<tr data-notebook="{page_text(c["notebook"])}" data-cell="{page_text(c["cell"])}" data-graded="{c["graded"]}" '
             f'data-full="{c["full"]}" data-pending="{c["pending"]}" data-not-graded="{c["not_graded"]}">'
-            f'<td><span class="cell">{_t(c["cell"])}</span><br><span class="muted">{_t(c["notebook"])}, '
+            f'<td><span class="cell">{page_text(c["cell"])}</span><br><span class="muted">{page_text(c["notebook"])}, '
             f'{c["kind"]}, {c["max"]:g} pt</span></td>'
             f'<td>{c["graded"]}</td><td class="rate">{_bar(c)}{c["full"]} ({_pct(c["full"], c["graded"])})</td>'
             f'<td>{c["partial"] + c["zero"]}</td><td>{c["not_graded"]}</td><td class="hint">{hint}</td></tr>')
@@ -581,7 +581,7 @@ def _predictions_section(d: dict) -> str:
             option = e["options"].get(x, "")
             rows.append(f'<tr data-ex="{e["exercise"]}" data-letter="{x}" data-locked="{e["locked"].get(x, 0)}" '
                         f'data-measured="{e["measured"].get(x, 0)}"><td>({x})</td>'
-                        f'<td class="option">{_t(option, 400)}</td>'
+                        f'<td class="option">{page_text(option, 400)}</td>'
                         f'<td>{e["locked"].get(x, 0)} ({_pct(e["locked"].get(x, 0), e["n_locked"])})</td>'
                         f'<td>{e["measured"].get(x, 0)} ({_pct(e["measured"].get(x, 0), e["n_measured"])})</td></tr>')
         head = "".join(f"<th>measured ({m})</th>" for m in L)
@@ -594,7 +594,7 @@ def _predictions_section(d: dict) -> str:
         parts.append(
             f'<div class="exercise" data-ex="{e["exercise"]}" data-notebooks="{e["n_notebooks"]}" '
             f'data-n-locked="{e["n_locked"]}" data-n-measured="{e["n_measured"]}" data-n-both="{e["n_both"]}" '
-            f'data-surprised="{e["surprised"]}"><h3>{e["exercise"]} ({_t(e["notebook"])})</h3>'
+            f'data-surprised="{e["surprised"]}"><h3>{e["exercise"]} ({page_text(e["notebook"])})</h3>'
             f'<p>{e["n_notebooks"]} notebooks read: {e["n_locked"]} show a locked prediction '
             f'({no_lock} none), {e["n_measured"]} a measurement of their own run. Of the {e["n_both"]} with both, '
             f'<strong>{e["surprised"]} ({_pct(e["surprised"], e["n_both"])}) were surprised</strong> (the '
@@ -624,12 +624,12 @@ def _receipts_section(d: dict) -> str:
     rows = []
     for e in d["exercises"].values():
         r = e["receipts"]
-        reasons = "; ".join(f'{_t(w)}: <span data-ex="{e["exercise"]}" data-reason="{_t(w)}">{n}</span>'
+        reasons = "; ".join(f'{page_text(w)}: <span data-ex="{e["exercise"]}" data-reason="{page_text(w)}">{n}</span>'
                             for (cat, w), n in sorted(e["reasons"].items(), key=lambda kv: -kv[1]))
         rows.append(f'<tr data-ex="{e["exercise"]}" data-in-order="{r["prediction in order"]}" '
                     f'data-missing="{r["missing"]}" data-out-of-order="{r["out of order"]}" '
                     f'data-other="{r["unreadable"] + r["other"]}" data-not-graded="{r["not graded"]}">'
-                    f'<td>{e["exercise"]} ({_t(e["notebook"])})</td><td>{r["prediction in order"]}</td>'
+                    f'<td>{e["exercise"]} ({page_text(e["notebook"])})</td><td>{r["prediction in order"]}</td>'
                     f'<td>{r["missing"]}</td><td>{r["out of order"]}</td><td>{r["unreadable"] + r["other"]}</td>'
                     f'<td>{r["not graded"]}</td><td class="hint">{reasons}</td></tr>')
     return ('<section id="receipts"><h2>Receipts missing or out of order</h2><p>The completion points\' verdicts '
@@ -651,7 +651,7 @@ def _flags_section(d: dict) -> str:
         if not items:
             continue
         names = d.get("names") or {}
-        rows = "".join(f'<tr class="flag" data-kind="{kind}"><td>{_who(s, names.get(s))}</td><td>{_t(text, 800)}</td></tr>'
+        rows = "".join(f'<tr class="flag" data-kind="{kind}"><td>{_who(s, names.get(s))}</td><td>{page_text(text, 800)}</td></tr>'
                        for s, text in items)
         students = len({s for s, _ in items})
         out.append(f'<details{" open" if len(items) <= 25 else ""} data-kind="{kind}" data-count="{len(items)}">'
@@ -693,9 +693,9 @@ def _glance(d: dict) -> str:
     auto = [c for c in d["cells"] if c["kind"] != "graded by hand" and c["graded"]]
     for c in sorted(auto, key=lambda c: c["full"] / c["graded"])[:2]:
         top = c["hints"].most_common(1)
-        items.append(f'<li><code>{_t(c["cell"])}</code> ({_t(c["notebook"])}): {_pct(c["full"], c["graded"])} of '
+        items.append(f'<li><code>{page_text(c["cell"])}</code> ({page_text(c["notebook"])}): {_pct(c["full"], c["graded"])} of '
                      f'{c["graded"]} with full points'
-                     + (f'; most often: {_t(top[0][0], 300)}' if top else "") + "</li>")
+                     + (f'; most often: {page_text(top[0][0], 300)}' if top else "") + "</li>")
     for e in d["exercises"].values():
         if e["n_both"]:
             lk, ms = e["locked"].most_common(1), e["measured"].most_common(1)
@@ -742,8 +742,8 @@ def render(d: dict, title: str) -> str:
             f'<meta http-equiv="Content-Security-Policy" content="{CSP}">\n<meta charset="utf-8">\n'
             '<meta name="viewport" content="width=device-width, initial-scale=1">\n'
             '<link rel="icon" href="data:,">\n'
-            f"<title>{_t(title)}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n"
-            f'<h1>{_t(title)}</h1><p class="muted">{d["students"]} students; made {now} by '
+            f"<title>{page_text(title)}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n"
+            f'<h1>{page_text(title)}</h1><p class="muted">{d["students"]} students; made {now} by '
             f'<code>autograde/class_report.py</code> from the gradebook and the notebooks as handed in. It holds '
             f'no student code and no hidden test.</p><nav>{nav}</nav>\n'
             + _guarantees_section(d.get("guarantees"))
@@ -757,11 +757,11 @@ def _guarantees_section(held) -> str:
     if not held:
         return ""
     off = [g for g in held if not g.held]
-    rows = "".join(f'<tr><td>{_t(g.name)}</td><td>{"held" if g.held else "<strong>NOT held</strong>"}</td>'
-                   f'<td>{_t(g.detail, 2000)}</td></tr>' for g in held)
+    rows = "".join(f'<tr><td>{page_text(g.name)}</td><td>{"held" if g.held else "<strong>NOT held</strong>"}</td>'
+                   f'<td>{page_text(g.detail, 2000)}</td></tr>' for g in held)
     return (f'<section id="guarantees"><h2>Guarantees of this run</h2><p>'
             + ("All of the sandbox\'s guarantees held." if not off else
-               f'<strong>{len(off)} of {len(held)} did not hold</strong> ({_t(", ".join(g.name for g in off))}): '
+               f'<strong>{len(off)} of {len(held)} did not hold</strong> ({page_text(", ".join(g.name for g in off))}): '
                f'read what a student\'s code could do there.')
             + ' They are also the first lines of the run\'s output and of <code>report.csv</code>.</p>'
               f'<table class="wide"><tr><th>guarantee</th><th></th><th>what holds, or why not and what a student '

@@ -1,7 +1,8 @@
 """The course: its settings, nbgrader on it, the bundle a grading task takes, one run at a time.
 
-Everything here is about the nbgrader course folder (``autograde/`` by default) and the private
-copies of it that grading tasks make: the assignment's name and notebooks, nbgrader's API and
+Everything here is about the nbgrader course folder (``COURSE_DIR``, ``course/`` at the repository's
+root by default; ``--course`` on the command lines, ``COURSE=`` to make) and the private copies of
+it that grading tasks make: the assignment's name and notebooks, nbgrader's API and
 command line on a folder, the zip a task receives, and the lock that keeps two grading runs off
 one folder.
 """
@@ -21,6 +22,15 @@ import yaml
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
+
+
+# The course folder: everything grading writes (nbgrader's source/, release/, submitted/,
+# autograded/ and feedback/, the gradebook, graded.json, shared_stages/, grades.csv, report.csv,
+# to_grade.csv, manual_grades.csv, the LMS import files, the class report, feedback_return/, the
+# lock) lands in it and nowhere else: never in this package, so nothing of a class's grading is
+# committed (.gitignore: /course/) or vendored into the Gradescope bundle. The one default of every
+# command's --course (grade, manual_grade, lms_feedback) and of make's COURSE=.
+COURSE_DIR = ROOT / "course"
 
 
 COURSE = yaml.safe_load((ROOT / "course.yaml").read_text())

@@ -1,6 +1,6 @@
 """Grade a whole class in one command: LMS download -> scores, feedback HTML and a grades CSV.
 
-    python -m autograde.grade SUBMISSIONS [--course autograde] [--timeout 120] [--jobs N]
+    python -m autograde.grade SUBMISSIONS [--course course] [--timeout 120] [--jobs N]
 
 SUBMISSIONS is a .zip as the LMS hands it over, or a folder: each student's downloaded notebooks
 (Jupyter or Colab), named ``<student_id>_<notebook>.ipynb`` or placed in ``<student_id>/``
@@ -43,14 +43,15 @@ import nbformat
 
 from . import guarantees, intake, sandbox
 from .class_report import write_class_report
-from .course import ASSIGNMENT, HERE, NOTEBOOKS, _one_run_per_course, course_bundle, prepare_course
+from .course import ASSIGNMENT, COURSE_DIR, HERE, NOTEBOOKS, _one_run_per_course, course_bundle, prepare_course
 from .feedback import generate_feedback, sanitize_feedback_sources
 from .gradebook import clear_submissions, export, record
-from .lms_export import spreadsheet_text, write_lms_exports
+from .lms_export import write_lms_exports
 from .lms_feedback import write_feedback_return
 from .prepare import prepare_student
 from .schedule import _split, default_jobs, run_tasks
 from .stages import SHARE_FROM, grader_fingerprint, shared_stages, submission_fingerprint
+from .text import spreadsheet_text
 from .to_grade import write_to_grade
 
 
@@ -58,7 +59,7 @@ STATE_FILE = "graded.json"           # per student: what was graded (fingerprint
 
 
 @_one_run_per_course
-def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs: int | None = None,
+def grade_class(submissions: Path, course: Path = COURSE_DIR, timeout: int = 120, jobs: int | None = None,
                 log=print, confine: bool | None = None, limits: dict | None = None,
                 progress: bool = True, scheduler=None, share: bool | None = None,
                 regrade: bool = False) -> dict:
@@ -96,6 +97,9 @@ def grade_class(submissions: Path, course: Path = HERE, timeout: int = 120, jobs
     held = guarantees.of_run(confine, why, limits, scheduler)   # which protections hold here, said first
     for line in guarantees.lines(held):
         log(line)
+    if course != HERE and (HERE / "gradebook.db").exists():      # the course folder of earlier versions
+        log(f"NOTE: autograde/ still holds a gradebook.db and the other outputs of grading from before they "
+            f"moved to the course folder; git no longer ignores them there: move them to {course} or delete them")
     prepare_course(course)
     shutil.copy(course / "gradebook.db", course / "gradebook.template.db")
     release = {name: nbformat.read(course / "release" / ASSIGNMENT / name, as_version=4) for name in NOTEBOOKS}
@@ -251,7 +255,8 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("submissions", type=Path, help="a .zip from the LMS, or a folder of notebooks")
-    p.add_argument("--course", type=Path, default=HERE, help="nbgrader course folder (default: autograde/)")
+    p.add_argument("--course", type=Path, default=COURSE_DIR,
+                   help="the course folder, where everything grading writes goes (default: course/)")
     p.add_argument("--timeout", type=int, default=120, help="seconds per cell before it is interrupted")
     p.add_argument("--jobs", type=int, default=None, help="grading tasks at once (default: one per core); fewer students than that split their notebooks")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",

@@ -114,7 +114,7 @@ def clear_submissions(course: Path, report: dict) -> None:
     :func:`record` writes each afresh."""
     from nbgrader.api import Gradebook
 
-    from .lms_export import spreadsheet_text
+    from .text import spreadsheet_text
 
     with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id=COURSE_ID) as gb:
         for s, rep in report.items():

@@ -118,11 +118,12 @@ VENDORED = ("pyproject.toml", "course.yaml", "pusht", "autograde")
 # hand-ins, honest variants, LMS downloads), the command-line tools for manual grades and Dask
 # workers, and the mark scheme (on Gradescope the sentences are a manually graded question)
 NOT_NEEDED = re.compile(r"^autograde/(classes/|manual_grade\.py$|dask_preload\.py$|mark_scheme\.yaml$)")
-NOT_VENDORED = re.compile(r"(^|/)(__pycache__|\.ipynb_checkpoints)(/|$)|\.pyc$|^autograde/(source|release|"
-                          r"submitted|autograded|feedback|feedback_return|shared_stages)/|^autograde/(gradebook\.db|"
-                          r"gradebook\.template\.db|grades\.csv|report\.csv|manual_grades\.csv|to_grade\.csv|"
-                          r"to_grade\.unapplied-[^/]*\.csv|graded\.json|"
-                          r"\.grading\.lock|canvas_import\.csv|moodle_import\.csv|lms_export_notes\.txt|class_report\.html)$")
+# of those, caches. Grading writes nothing in them: its outputs (students' names, answers, scores)
+# go to the course folder (course.COURSE_DIR, course/), which no path of VENDORED holds and which
+# _vendored_files leaves out wherever it is. An untracked file is vendored only if it is Python
+# source (a new module not committed yet): never a data file, such as an output of a grading run
+# from before the course folder left autograde/ (no longer ignored by git there).
+NOT_VENDORED = re.compile(r"(^|/)(__pycache__|\.ipynb_checkpoints)(/|$)|\.pyc$")
 # what grading imports (autograde/, pusht/, the notebooks' kernels), by their requirements.txt names
 GRADING_PACKAGES = ("torch", "pymunk", "numpy", "matplotlib", "tqdm", "pyyaml", "ipykernel", "nbgrader", "nh3")
 PYTHON = "3.11"                       # as CI runs it (nbgrader 0.9.6 needs 3.11 or newer)
@@ -203,20 +204,30 @@ def _add(zf: zipfile.ZipFile, name: str, data: bytes, mode: int) -> None:
     zf.writestr(info, data)
 
 
-def _vendored_files(root: Path) -> list[str]:
-    """The files of ``VENDORED`` that git would commit (tracked, or new and not ignored), that exist
-    and that grading needs (``NOT_NEEDED``)."""
+def _vendored_files(root: Path, course: Path | None = None) -> list[str]:
+    """The files of ``VENDORED`` that git would commit (tracked, or new, not ignored and Python
+    source), that exist, that grading needs (``NOT_NEEDED``) and that are not in the course folder
+    ``course`` (default ``course.COURSE_DIR``)."""
+    from .course import COURSE_DIR
+
+    course = Path(course or COURSE_DIR).resolve()
+
+    def git(*args: str) -> list[str]:
+        out = subprocess.run(["git", "-C", str(root), "ls-files", "-z", *args, "--", *VENDORED],
+                             capture_output=True, check=True).stdout.decode()
+        return [n for n in out.split("\0") if n]
+
     try:
-        out = subprocess.run(["git", "-C", str(root), "ls-files", "-z", "-co", "--exclude-standard", "--",
-                              *VENDORED], capture_output=True, check=True).stdout.decode()
-        names = [n for n in out.split("\0") if n]
-    except (OSError, subprocess.CalledProcessError):          # not a git checkout: every file but caches
-        names = []
+        names = git("-c") + [n for n in git("-o", "--exclude-standard") if n.endswith(".py")]
+    except (OSError, subprocess.CalledProcessError):          # not a git checkout: every file but caches,
+        names = []                                            # and of the grader only its Python source
         for top in VENDORED:
             p = root / top
             names += [top] if p.is_file() else [q.relative_to(root).as_posix() for q in p.rglob("*") if q.is_file()]
+        names = [n for n in names if not n.startswith("autograde/") or n.endswith(".py")]
     return sorted({n for n in names if not NOT_VENDORED.search(n) and not NOT_NEEDED.search(n)
-                   and (root / n).is_file() and not (root / n).is_symlink()})
+                   and (root / n).is_file() and not (root / n).is_symlink()
+                   and not (root / n).resolve().is_relative_to(course)})
 
 
 def _git_state(root: Path, files: list[str]) -> tuple[str | None, list[str]]:
@@ -638,7 +649,7 @@ def stage(submission: Path, dest: Path) -> tuple[list[str], list[str]]:
     from .course import NOTEBOOKS, SOURCE
     from .identify import Identifier
 
-    names = intake._Names(NOTEBOOKS)     # the intake's own reading of a file name
+    names = intake.NotebookNames(NOTEBOOKS)     # the intake's own reading of a file name
     identifier = None
     dest.mkdir(parents=True, exist_ok=True)
     found: dict[str, list] = {}
@@ -660,7 +671,7 @@ def stage(submission: Path, dest: Path) -> tuple[list[str], list[str]]:
             if match is not None and match.notebook:
                 notes.append(f"{rel}: graded as {match.notebook}: its name names no notebook of this assignment, "
                              f"but {match.words()}")
-                parsed = (None, match.notebook, intake._reupload(base)[1])
+                parsed = (None, match.notebook, intake.reupload(base)[1])
             else:
                 why = f": {match.words()}" if match is not None else ""
                 notes.append(f"{rel}: not a notebook of this assignment ({names.expected}), by its name or by "

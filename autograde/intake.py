@@ -269,7 +269,7 @@ def _is_junk(parts: list[str]) -> bool:
     return any(p.startswith(".") or p.casefold() in _JUNK for p in parts)
 
 
-class _Names:
+class NotebookNames:
     """Parses the file-name part of a member against the assignment's notebooks."""
 
     identifier: Identifier | None = None     # set by collect when it has the release
@@ -485,7 +485,7 @@ def collect(submissions: Path, notebooks: list[str], *, release: dict | None = N
       byte limit.
     """
     submissions = Path(submissions)
-    names = _Names(notebooks)
+    names = NotebookNames(notebooks)
     names.identifier = Identifier(release) if release else None
     intake = Intake()
     rejected = intake.rejected
@@ -501,7 +501,7 @@ def collect(submissions: Path, notebooks: list[str], *, release: dict | None = N
         return _collect(entries, names, intake, max_member_bytes, max_total_bytes)
 
 
-def _collect(entries: list[_Entry], names: _Names, intake: Intake,
+def _collect(entries: list[_Entry], names: NotebookNames, intake: Intake,
              max_member_bytes: int, max_total_bytes: int) -> Intake:
     rejected = intake.rejected
     pending_notes: list[tuple[str, str]] = []   # (student as written, note)
@@ -640,7 +640,7 @@ def _collect(entries: list[_Entry], names: _Names, intake: Intake,
     return _finish(intake, ids, pending_notes)
 
 
-def _identify(candidates: list[_Candidate], ids: dict[str, str], names: _Names, intake: Intake,
+def _identify(candidates: list[_Candidate], ids: dict[str, str], names: NotebookNames, intake: Intake,
               max_member_bytes: int, max_total_bytes: int, total: int = 0) -> tuple[list[_Candidate], int]:
     """Read every candidate ahead and decide which notebook it is by its content (``identify``;
     ``collect``'s rules); ``total``: bytes already read. Returns the candidates that are some
@@ -680,7 +680,7 @@ def _identify(candidates: list[_Candidate], ids: dict[str, str], names: _Names, 
         if match is not None and match.notebook and match.notebook != c.by_name:
             c.notebook = match.notebook
             if c.by_name is None:
-                c.counter = _reupload(base)[1]     # "_final (2)" is newer than "_final" on a tie
+                c.counter = reupload(base)[1]     # "_final (2)" is newer than "_final" on a tie
                 c.renamed = f"its name names no notebook of this assignment, but {match.words()}"
             else:
                 c.renamed = f"its name says {c.by_name}, but {match.words()}"
@@ -781,9 +781,9 @@ def _base(c: _Candidate) -> str:
 _REUPLOAD = re.compile(rf"^(?:copy of\s*)*(?P<stem>.*?){_SUFFIX}(?:\.ipynb)?$", re.IGNORECASE)
 
 
-def _reupload(base: str) -> tuple[str, int]:
+def reupload(base: str) -> tuple[str, int]:
     """(the name less an upload's re-upload marks, its counter): ``Copy of x (2).ipynb`` -> ("x", 2),
-    as ``_Names.parse`` reads a notebook's name, for any name."""
+    as ``NotebookNames.parse`` reads a notebook's name, for any name."""
     m = _REUPLOAD.match(base.strip())
     return m["stem"].strip().casefold(), int(m["n1"] or m["n2"] or 0)
 
@@ -791,7 +791,7 @@ def _reupload(base: str) -> tuple[str, int]:
 def _stem(c: _Candidate) -> str:
     """One name for a file and its re-uploads: the notebook its name names, else its own name less
     the re-upload marks (``05_horizon_final-1.ipynb`` and ``05_horizon_final.ipynb`` are one)."""
-    return c.by_name or _reupload(_base(c))[0]
+    return c.by_name or reupload(_base(c))[0]
 
 
 _NEWEST = {"canvas": "the newest (Canvas numbers the files it keeps in the order they were uploaded)",
@@ -813,7 +813,7 @@ def _finish(intake: Intake, ids: dict[str, str], pending_notes: list[tuple[str, 
     return intake
 
 
-def _collect_lms(usable: list[_Entry], system: str, wrapped: bool, names: _Names, intake: Intake,
+def _collect_lms(usable: list[_Entry], system: str, wrapped: bool, names: NotebookNames, intake: Intake,
                  max_member_bytes: int, max_total_bytes: int) -> Intake:
     """A download in ``system``'s own layout (``lms_layouts``): the LMS's id of each student decides
     whose a file is; their folder-safe id is ``<system>_<LMS id>`` (``canvas_12345``,

@@ -121,23 +121,17 @@ say so.
 
 from __future__ import annotations
 
-import csv
-import io
-import os
-import re
-import tempfile
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
 
 from .course import ASSIGNMENT, COURSE, COURSE_ID
+from .lms_layouts import TITLE
+from .text import clean_text, count, digits, ident, num, spreadsheet_text, write_atomic, write_csv
 
 CANVAS_FILE = "canvas_import.csv"
 MOODLE_FILE = "moodle_import.csv"
 NOTES_FILE = "lms_export_notes.txt"
-
-BOM = "\ufeff"
-NEWLINE = "\r\n"
 
 # Canvas's student columns, in the order its exporter writes them (Integration ID and Root Account
 # only exist where an account turns them on; the importer does not need them).
@@ -153,16 +147,11 @@ MOODLE_USER_FIELDS = {"username": "Username", "useridnumber": "ID number", "user
                       "userid": "User ID"}
 MOODLE_IDENTIFIERS = ("participant", *MOODLE_USER_FIELDS)
 
-SYSTEMS = {"canvas": "Canvas", "moodle": "Moodle", "blackboard": "Blackboard"}
-
 DEFAULTS = {
     "points_possible": None,
     "canvas": {"assignment_id": None, "assignment_name": None, "student_ids_are": None},
     "moodle": {"identifier": "participant", "grade_item": None, "student_ids_are": None},
 }
-
-_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
-_FORMULA = ("=", "+", "-", "@")
 
 
 # ---------------------------------------------------------------- course.yaml's lms: section ----
@@ -193,7 +182,7 @@ def lms_settings(raw: dict | None = None) -> tuple[dict, list[str]]:
     aid = canvas["assignment_id"]
     if aid is not None:
         aid = str(aid).strip()
-        if not _digits(aid):
+        if not digits(aid):
             warnings.append(f"lms.canvas.assignment_id {canvas['assignment_id']!r} is not a Canvas assignment id "
                             f"(digits): it is left out of the column title")
             aid = None
@@ -212,7 +201,7 @@ def lms_settings(raw: dict | None = None) -> tuple[dict, list[str]]:
         moodle["student_ids_are"] = None
     for part, key in (("canvas", "assignment_name"), ("moodle", "grade_item")):
         v = out[part][key]
-        out[part][key] = _clean_text(str(v)) if v not in (None, "") else None
+        out[part][key] = clean_text(str(v)) if v not in (None, "") else None
     return out, warnings
 
 
@@ -266,7 +255,7 @@ def read_standings(course: Path, report: dict) -> tuple[dict[str, Standing], flo
                 if not touched and f"{nb.name}.ipynb" not in failed:
                     worth = sum(float(g.max_score) for g in grades)
                     st.notes.append(f"{nb.name} was not graded (not handed in, or not readable): "
-                                    f"0 of its {_num(worth)} points, as in grades.csv")
+                                    f"0 of its {num(worth)} points, as in grades.csv")
                     continue
                 for g in sorted(grades, key=lambda g: g.name):
                     by_hand = (isinstance(g.cell, TaskCell) or g.cell.cell_type == "markdown"
@@ -279,7 +268,7 @@ def read_standings(course: Path, report: dict) -> tuple[dict[str, Standing], flo
                         continue
                     if g.manual_score is None and g.auto_score is None:
                         st.notes.append(f"{nb.name} {g.name}: no result (its notebook did not finish): "
-                                        f"0 of {_num(float(g.max_score))}, as in grades.csv")
+                                        f"0 of {num(float(g.max_score))}, as in grades.csv")
                     st.points += float(g.score)
             standings[student] = st
     return standings, total
@@ -323,7 +312,7 @@ def write_lms_exports(course: Path, report: dict, *, settings: dict | None = Non
     scale = (lms_max / total) if (total and lms_max) else 1.0
 
     def lms_points(st: Standing) -> str:
-        return _num(st.points * scale)
+        return num(st.points * scale)
 
     served = systems_served(report, cfg)
     sheets = []
@@ -334,13 +323,13 @@ def write_lms_exports(course: Path, report: dict, *, settings: dict | None = Non
     paths = []
     for sheet in sheets:
         paths.append(course / sheet.file)
-        _write_csv(paths[-1], sheet.header, [*sheet.lead, *(r for _, r in sheet.rows)])
+        write_csv(paths[-1], sheet.header, [*sheet.lead, *(r for _, r in sheet.rows)])
     for system, file in (("canvas", CANVAS_FILE), ("moodle", MOODLE_FILE)):
         if system not in served:
             if (course / file).is_file():
                 (course / file).unlink()
                 warnings.append(f"removed {file}, left by an earlier grading in this course folder: this "
-                                f"download is not {SYSTEMS[system]}'s")
+                                f"download is not {TITLE[system]}'s")
     if not sheets:
         warnings.append("no import file written: the download is in no LMS's own layout (Canvas, Moodle, Blackboard) "
                         "and course.yaml's lms.canvas.student_ids_are / lms.moodle.student_ids_are do not say "
@@ -350,13 +339,13 @@ def write_lms_exports(course: Path, report: dict, *, settings: dict | None = Non
                         "Grade Center takes them by hand or by its own upload)")
     notes = _notes(report, standings, total, lms_max, warnings, sheets, now, course)
     paths.append(course / NOTES_FILE)
-    _write_atomic(paths[-1], notes.encode("utf-8"))
+    write_atomic(paths[-1], notes.encode("utf-8"))
     for line in warnings:
         log(f"WARNING: lms export: {line}")
     for sheet in sheets:
         left = len(sheet.pending) + sum(map(len, sheet.missing.values())) + sum(len(s) for s, _ in sheet.conflicts)
         waiting = f", {len(sheet.pending)} of them waiting for hand-graded answers" if sheet.pending else ""
-        log(f"{sheet.file}: {_count(len(sheet.rows))}" +
+        log(f"{sheet.file}: {count(len(sheet.rows))}" +
             (f"; {left} not in it{waiting}: see {NOTES_FILE}" if left else ""))
     return paths
 
@@ -364,7 +353,7 @@ def write_lms_exports(course: Path, report: dict, *, settings: dict | None = Non
 def systems_served(report: dict, cfg: dict) -> set[str]:
     """The LMSs an import file can serve: those of the students' own records (the download's
     layout), and Canvas or Moodle where course.yaml says what a generic download's ids are."""
-    served = {lms["system"] for lms in map(_lms, report.values()) if lms}
+    served = {lms["system"] for lms in map(lms_record, report.values()) if lms}
     for system in ("canvas", "moodle"):
         if cfg[system].get("student_ids_are"):
             served.add(system)
@@ -376,28 +365,28 @@ def _canvas_sheet(report, standings, cfg, lms_max, lms_points) -> _Sheet:
     title = c["assignment_name"] or ASSIGNMENT
     column = f"{title} ({c['assignment_id']})" if c["assignment_id"] else title
     sheet = _Sheet(CANVAS_FILE, header=[*CANVAS_STUDENT_COLUMNS, column],
-                   lead=[[CANVAS_POINTS_ROW, "", "", "", "", _num(lms_max) if lms_max else ""]])
+                   lead=[[CANVAS_POINTS_ROW, "", "", "", "", num(lms_max) if lms_max else ""]])
     if not c["assignment_id"]:
         sheet.info.append(f"lms.canvas.assignment_id is not set: the column is titled {column!r} without an id, "
                           f"so Canvas matches it by exact title or offers to create a NEW assignment")
     claims = {}
     for s in sorted(report):
-        lms = _lms(report[s])
+        lms = lms_record(report[s])
         key, why = None, None
         if lms and lms["system"] == "canvas":
-            uid = _ident(lms["ids"].get("user_id"))
+            uid = ident(lms["ids"].get("user_id"))
             if uid is None:
                 why = "the Canvas download gave no Canvas user id"
             elif uid.startswith("anon_"):
                 why = ("anonymous grading: Canvas's download names the student only by an anonymous id, "
                        "which its gradebook import cannot match (grade in SpeedGrader, or import after "
                        "anonymity is lifted and the submissions are downloaded again)")
-            elif not _digits(uid):
+            elif not digits(uid):
                 why = f"its Canvas user id {uid!r} is not a number"
             else:
                 key = ("ID", uid)
         elif lms:
-            why = f"no Canvas user id: the hand-in came from {SYSTEMS.get(lms['system'], lms['system'])}"
+            why = f"no Canvas user id: the hand-in came from {TITLE.get(lms['system'], lms['system'])}"
         elif c["student_ids_are"]:
             key = (CANVAS_SIS[c["student_ids_are"]], s)
             if "~" in s:
@@ -418,65 +407,65 @@ def _canvas_sheet(report, standings, cfg, lms_max, lms_points) -> _Sheet:
 
 def _moodle_sheet(report, standings, cfg, lms_max, lms_points, now) -> _Sheet:
     m = cfg["moodle"]
-    ident = m["identifier"]
+    user_field = m["identifier"]
     sheet = _Sheet(MOODLE_FILE)
     stamp = now.astimezone(timezone.utc).replace(microsecond=0).isoformat()
-    if ident == "participant":
+    if user_field == "participant":
         sheet.header = list(MOODLE_WORKSHEET_COLUMNS)
         sheet.info.append("the assignment's offline grading worksheet: upload it under the assignment "
                           "(View all submissions > Upload grading worksheet), not in the gradebook, with your "
                           "Moodle language set to English (its column titles are matched in your language)")
     else:
-        sheet.header = [MOODLE_USER_FIELDS[ident], "Full name", m["grade_item"] or ASSIGNMENT]
-        sheet.info.append(f"the gradebook's CSV import: map from {MOODLE_USER_FIELDS[ident]!r} to {ident}, "
+        sheet.header = [MOODLE_USER_FIELDS[user_field], "Full name", m["grade_item"] or ASSIGNMENT]
+        sheet.info.append(f"the gradebook's CSV import: map from {MOODLE_USER_FIELDS[user_field]!r} to {user_field}, "
                           f"{sheet.header[2]!r} to the assignment's grade item, 'Full name' to Ignore")
         if lms_max and lms_max > 100:
-            sheet.info.append(f"grades above 100 ({_num(lms_max)} possible) are refused unless the site allows "
+            sheet.info.append(f"grades above 100 ({num(lms_max)} possible) are refused unless the site allows "
                               f"them (Site administration > Grades > General settings: unlimitedgrades)")
     claims = {}
     for s in sorted(report):
-        lms = _lms(report[s])
+        lms = lms_record(report[s])
         key, why = None, None
-        if ident == "participant":
+        if user_field == "participant":
             if lms and lms["system"] == "moodle":
-                pid = _ident(lms["ids"].get("participant_id"))
+                pid = ident(lms["ids"].get("participant_id"))
                 if pid is None:
                     why = "the Moodle download gave no participant number"
-                elif not _digits(pid):
+                elif not digits(pid):
                     why = f"its participant number {pid!r} is not a number"
                 else:
                     key = ("participant", pid)
             elif lms:
-                why = f"no Moodle participant number: the hand-in came from {SYSTEMS.get(lms['system'], lms['system'])}"
+                why = f"no Moodle participant number: the hand-in came from {TITLE.get(lms['system'], lms['system'])}"
             else:
                 why = ("no Moodle participant number: the file name carried only a student id (the worksheet "
                        "needs Moodle's own download; or set lms.moodle.identifier to the user field these ids are)")
         else:
-            label = MOODLE_USER_FIELDS[ident]
+            label = MOODLE_USER_FIELDS[user_field]
             if lms and lms["system"] == "moodle":
-                value = _ident(lms["ids"].get(ident))
+                value = ident(lms["ids"].get(user_field))
                 if value is not None:
-                    key = (ident, value)
+                    key = (user_field, value)
                 else:
                     why = (f"no Moodle {label}: Moodle's download names a student by participant number, which "
                            f"the gradebook import cannot match (it is not the user id); set "
                            f"lms.moodle.identifier: participant to write the assignment's grading worksheet")
             elif lms:
-                why = f"no Moodle {label}: the hand-in came from {SYSTEMS.get(lms['system'], lms['system'])}"
-            elif m["student_ids_are"] == ident:
-                key = (ident, s)
+                why = f"no Moodle {label}: the hand-in came from {TITLE.get(lms['system'], lms['system'])}"
+            elif m["student_ids_are"] == user_field:
+                key = (user_field, s)
                 if "~" in s:
                     key, why = None, (f"its student id was renamed by intake to keep two students apart, so it "
                                       f"is no Moodle {label}")
             else:
                 why = (f"no Moodle {label}: the file name carried only a student id (set "
-                       f"lms.moodle.student_ids_are: {ident} if these ids are Moodle {label}s)")
+                       f"lms.moodle.student_ids_are: {user_field} if these ids are Moodle {label}s)")
         if key is None:
             sheet.missing.setdefault(why, []).append(s)
             continue
         claims.setdefault(key, []).append(s)
-    maximum = _num(lms_max) if lms_max else ""
-    if ident == "participant":
+    maximum = num(lms_max) if lms_max else ""
+    if user_field == "participant":
         row = lambda key, s, name, pts: [MOODLE_PARTICIPANT + key[1], name, pts, maximum, stamp]   # noqa: E731
     else:
         row = lambda key, s, name, pts: [key[1], name, pts]                                        # noqa: E731
@@ -499,7 +488,7 @@ def _place(sheet: _Sheet, claims: dict, report: dict, standings: dict, lms_point
         if st.pending:
             sheet.pending.append(s)
             continue
-        sheet.rows.append((s, make_row(key, s, _name(report[s], s), lms_points(st))))
+        sheet.rows.append((s, make_row(key, s, student_label(report[s], s), lms_points(st))))
 
 
 # ------------------------------------------------------------------------------ the notes file ----
@@ -507,8 +496,8 @@ def _place(sheet: _Sheet, claims: dict, report: dict, standings: dict, lms_point
 def _notes(report, standings, total, lms_max, warnings, sheets, now, course) -> str:
     out = [f"LMS import files for assignment {ASSIGNMENT} ({course}), written "
            f"{now.astimezone(timezone.utc).replace(microsecond=0).isoformat()}",
-           f"Scores: {_num(total) if total else '?'} points in the notebooks" +
-           (f", written out of {_num(lms_max)} (lms.points_possible): set the LMS assignment to that maximum"
+           f"Scores: {num(total) if total else '?'} points in the notebooks" +
+           (f", written out of {num(lms_max)} (lms.points_possible): set the LMS assignment to that maximum"
             if total and lms_max != total else
             ": set the LMS assignment's points (Canvas) or maximum grade (Moodle) to the same number"),
            "A student is in a file only when every hand-graded answer has a grade; the LMS keeps what it has "
@@ -516,7 +505,7 @@ def _notes(report, standings, total, lms_max, warnings, sheets, now, course) -> 
     if warnings:
         out += ["", "Settings (course.yaml, lms:):", *[f"  {w}" for w in warnings]]
     for sheet in sheets:
-        out += ["", f"== {sheet.file}: {_count(len(sheet.rows))} ==", *[f"  {i}" for i in sheet.info]]
+        out += ["", f"== {sheet.file}: {count(len(sheet.rows))} ==", *[f"  {i}" for i in sheet.info]]
         if sheet.pending:
             out.append(f"  Not exported yet, hand-graded answers to grade ({len(sheet.pending)}):")
             out += [f"    {_pending_line(s, report, standings[s], total)}" for s in sheet.pending]
@@ -532,14 +521,14 @@ def _notes(report, standings, total, lms_max, warnings, sheets, now, course) -> 
         if remarks:
             out.append("  About scores in the file:")
             out += [f"    {s}: {n}" for s, n in remarks]
-    late = [s for s in sorted(report) if (_lms(report[s]) or {}).get("late")]
+    late = [s for s in sorted(report) if (lms_record(report[s]) or {}).get("late")]
     if late:
         out += ["", "Late hand-ins, as the LMS marked them (scores are exported without any penalty):"]
         for s in late:
-            lms = _lms(report[s])
+            lms = lms_record(report[s])
             when = f", submitted {lms['submitted_at']}" if lms.get("submitted_at") else ""
             att = f", attempt {lms['attempt']}" if lms.get("attempt") is not None else ""
-            out.append(f"  {s} ({_name(report[s], s)}){when}{att}")
+            out.append(f"  {s} ({student_label(report[s], s)}){when}{att}")
     out += ["", "To export a student who waits: python -m autograde.manual_grade STUDENT NOTEBOOK GRADE_ID SCORE "
             "for each answer named above, then run make grade again (unchanged students are not regraded; "
             "manual grades are re-applied) and upload the new file."]
@@ -547,15 +536,15 @@ def _notes(report, standings, total, lms_max, warnings, sheets, now, course) -> 
 
 
 def _pending_line(s, report, st: Standing, total) -> str:
-    cells = "; ".join(f"{nb} {g} ({_num(m)} point{'s' if m != 1 else ''})" for nb, g, m in st.pending)
+    cells = "; ".join(f"{nb} {g} ({num(m)} point{'s' if m != 1 else ''})" for nb, g, m in st.pending)
     extra = f"; also: {'; '.join(st.notes)}" if st.notes else ""
-    return (f"{s} ({_name(report[s], s)}): not graded yet: {cells}. So far {_num(st.points)} of "
-            f"{_num(total or 0)} points, {_num(st.pending_points)} still to grade{extra}")
+    return (f"{s} ({student_label(report[s], s)}): not graded yet: {cells}. So far {num(st.points)} of "
+            f"{num(total or 0)} points, {num(st.pending_points)} still to grade{extra}")
 
 
 # -------------------------------------------------------------------------------------- helpers ----
 
-def _lms(rep) -> dict | None:
+def lms_record(rep) -> dict | None:
     """``rep["lms"]`` when it is a usable identity, else None."""
     lms = (rep or {}).get("lms") if isinstance(rep, dict) else None
     if not isinstance(lms, dict) or not isinstance(lms.get("system"), str):
@@ -564,70 +553,12 @@ def _lms(rep) -> dict | None:
     return {**lms, "ids": ids if isinstance(ids, dict) else {}}
 
 
-def _ident(value) -> str | None:
-    """An identifier as text, or None when it is empty or carries control characters."""
-    if value is None or isinstance(value, bool):
-        return None
-    text = str(value).strip()
-    if not text or _CONTROL.search(text):
-        return None
-    return text
-
-
 def _mapping(value) -> dict:
     return value if isinstance(value, dict) else {}
 
 
-def _digits(text: str) -> bool:
-    """ASCII digits only (``str.isdigit`` also takes '²' and other scripts' digits)."""
-    return re.fullmatch(r"[0-9]+", text) is not None
-
-
-def _count(n: int) -> str:
-    return f"{n} student{'' if n == 1 else 's'}"
-
-
-def _clean_text(text: str) -> str:
-    return " ".join(_CONTROL.sub(" ", text).split())
-
-
-def spreadsheet_text(text: str) -> str:
-    """``text`` fit for a spreadsheet cell: no control characters, and never read as a formula."""
-    text = _clean_text(str(text))
-    return "'" + text if text.startswith(_FORMULA) else text
-
-
-def _name(rep, student: str) -> str:
+def student_label(rep, student: str) -> str:
     """The student's name for a file: the LMS's, else the id; no control characters, no formula."""
-    lms = _lms(rep)
-    name = _clean_text(str(lms.get("name") or "")) if lms else ""
+    lms = lms_record(rep)
+    name = clean_text(str(lms.get("name") or "")) if lms else ""
     return spreadsheet_text(name or student)
-
-
-def _num(x: float | None) -> str:
-    """Points as both LMSs read them: '.' decimal point, at most 2 decimals, no exponent."""
-    if x is None:
-        return ""
-    text = f"{round(float(x), 2):.2f}".rstrip("0").rstrip(".")
-    return "0" if text in ("", "-0") else text
-
-
-def _write_csv(path: Path, header: list[str], rows: list[list[str]]) -> None:
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator=NEWLINE, quoting=csv.QUOTE_MINIMAL)
-    w.writerow(header)
-    w.writerows(rows)
-    _write_atomic(path, (BOM + buf.getvalue()).encode("utf-8"))
-
-
-def _write_atomic(path: Path, data: bytes) -> None:
-    """Replace ``path`` whole (a reader never sees half a file; a link there is replaced, not followed)."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise

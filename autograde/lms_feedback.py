@@ -34,7 +34,7 @@ instructor`` in it, as ``gradescope`` also leaves out) is not on the student's p
 counts them.
 
 The page is safe to open: every string a student could have made (their name, a note quoting
-their file, a comment) is escaped with the class report's ``_t`` (control and invisible
+their file, a comment) is escaped with the class report's ``page_text`` (control and invisible
 characters spelled as code points); no script; the first element of ``<head>`` is the class
 report's Content-Security-Policy (no script, no fetch, no form); readable on a phone (viewport
 meta, no fixed widths) and in dark mode (``prefers-color-scheme``). Every zip is written whole to
@@ -134,12 +134,13 @@ import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .class_report import CSP, _t, display_name, gradebook_rows, hint_of
-from .course import ASSIGNMENT, HERE, NOTEBOOKS
+from .class_report import CSP, display_name, gradebook_rows, hint_of, page_text
+from .course import ASSIGNMENT, COURSE_DIR, NOTEBOOKS
 from .files import read_capped
 from .gradebook import read_manual
-from .lms_export import _ident, _lms, _num, _write_atomic, lms_settings, read_standings
-from .lms_layouts import _MOODLE_FLAT, TITLE, _canvas_splits, _word
+from .lms_export import lms_record, lms_settings, read_standings
+from .lms_layouts import MOODLE_FLAT, TITLE, canvas_splits, word_char
+from .text import ident, num, write_atomic
 
 RETURN_DIR = "feedback_return"
 CANVAS_ZIP = "canvas_feedback_upload.zip"
@@ -193,51 +194,51 @@ li { margin: .25em 0; } .comment { white-space: pre-wrap; }
 
 def _who(student: str, lms: dict | None, name: str | None = None) -> str:
     name = name or (lms or {}).get("name")
-    ident = ""
+    lms_ids = ""
     if lms:
         ids = lms.get("ids") or {}
         pairs = [(k, ids.get(k)) for k in ("user_id", "participant_id", "username") if ids.get(k)]
-        ident = ", ".join(f"{TITLE.get(lms['system'], lms['system'])} {k.replace('_', ' ')} "
-                          f"<bdi class=\"id\">{_t(v, 128)}</bdi>" for k, v in pairs)
-    head = f"<bdi>{_t(name, 200)}</bdi> " if name else ""
-    return (f'{head}(student id <bdi class="id">{_t(student, 128)}</bdi>' + (f"; {ident}" if ident else "") + ")")
+        lms_ids = ", ".join(f"{TITLE.get(lms['system'], lms['system'])} {k.replace('_', ' ')} "
+                          f"<bdi class=\"id\">{page_text(v, 128)}</bdi>" for k, v in pairs)
+    head = f"<bdi>{page_text(name, 200)}</bdi> " if name else ""
+    return (f'{head}(student id <bdi class="id">{page_text(student, 128)}</bdi>' + (f"; {lms_ids}" if lms_ids else "") + ")")
 
 
 def _summary(student: str, rep: dict, standing, total, cells: list, manual: dict, pages: list[str],
              why_no_pages: str | None) -> tuple[bytes, int]:
     """(the page, how many instructor notes were left off)."""
-    lms = _lms(rep)
+    lms = lms_record(rep)
     notes = [n if isinstance(n, str) else str(n) for n in (rep.get("notes") or ())]
     withheld = sum(INSTRUCTOR_ONLY in n for n in notes)
     notes = [n for n in notes if INSTRUCTOR_ONLY not in n]
-    out = [f"<h1>Feedback: {_t(ASSIGNMENT)}</h1>", f"<p>{_who(student, lms, display_name(rep))}</p>"]
+    out = [f"<h1>Feedback: {page_text(ASSIGNMENT)}</h1>", f"<p>{_who(student, lms, display_name(rep))}</p>"]
 
     # total
     pending = standing.pending if standing else []
     if standing is None or total is None:
         out.append('<p class="total">No score yet: the course has no gradebook entry for you.</p>')
     else:
-        out.append(f'<p class="total">Total: {_num(standing.points)} of {_num(total)} points</p>')
+        out.append(f'<p class="total">Total: {num(standing.points)} of {num(total)} points</p>')
         lms_max = lms_settings()[0]["points_possible"]
         if lms_max and total and lms_max != total:
-            out.append(f"<p>In the LMS, where the assignment is out of {_num(lms_max)}: "
-                       f"{_num(standing.points * lms_max / total)} of {_num(lms_max)}.</p>")
+            out.append(f"<p>In the LMS, where the assignment is out of {num(lms_max)}: "
+                       f"{num(standing.points * lms_max / total)} of {num(lms_max)}.</p>")
         if pending:
-            out.append(f"<p>{_num(standing.pending_points)} point{'s' * (standing.pending_points != 1)} "
+            out.append(f"<p>{num(standing.pending_points)} point{'s' * (standing.pending_points != 1)} "
                        f"of answers graded by hand {'are' if len(pending) > 1 else 'is'} not graded yet and not "
-                       f"counted above (never as 0): " + "; ".join(f"{_t(nb)} {_t(g)}" for nb, g, _ in pending)
+                       f"counted above (never as 0): " + "; ".join(f"{page_text(nb)} {page_text(g)}" for nb, g, _ in pending)
                        + ".</p>")
         if standing.notes:
-            out.append("<ul>" + "".join(f"<li>{_t(n, 2000)}</li>" for n in standing.notes) + "</ul>")
+            out.append("<ul>" + "".join(f"<li>{page_text(n, 2000)}</li>" for n in standing.notes) + "</ul>")
 
     # files whose names did not say what they are (intake.Intake.human): said first, not buried in the notes
     files = [h for h in rep.get("human") or () if isinstance(h, dict)]
     if files:
         out.append('<h2>Your files</h2><p>Files whose names did not settle which notebook they are, and what '
                    'became of each (every file is read for what it holds):</p><ul class="files">' + "".join(
-                       f"<li><code>{_t(h.get('file'), 300)}</code>: "
-                       + (f"graded as <code>{_t(h['graded'])}</code>" if h.get("graded") else "<strong>not graded</strong>")
-                       + f" ({_t(h.get('why'), 600)})</li>" for h in files) + "</ul>")
+                       f"<li><code>{page_text(h.get('file'), 300)}</code>: "
+                       + (f"graded as <code>{page_text(h['graded'])}</code>" if h.get("graded") else "<strong>not graded</strong>")
+                       + f" ({page_text(h.get('why'), 600)})</li>" for h in files) + "</ul>")
 
     # per notebook
     waiting = {(nb, g) for nb, g, _ in pending}
@@ -263,8 +264,8 @@ def _summary(student: str, rep: dict, standing, total, cells: list, manual: dict
             status = f"{d['waiting']} answer{'s' * (d['waiting'] > 1)} still to be graded by hand"
         else:
             status = "graded"
-        rows.append(f"<tr><td>{_t(nb)}</td><td class=\"num\">{_num(d['points'])} / {_num(d['max'])}</td>"
-                    f"<td>{_t(status)}</td><td>{'<code>' + _t(nb + '.html') + '</code>' if page else '—'}</td></tr>")
+        rows.append(f"<tr><td>{page_text(nb)}</td><td class=\"num\">{num(d['points'])} / {num(d['max'])}</td>"
+                    f"<td>{page_text(status)}</td><td>{'<code>' + page_text(nb + '.html') + '</code>' if page else '—'}</td></tr>")
     if rows:
         out.append("<h2>Notebooks</h2><table><tr><th>notebook</th><th>points</th><th>status</th>"
                    "<th>its feedback page</th></tr>" + "".join(rows) + "</table>")
@@ -282,7 +283,7 @@ def _summary(student: str, rep: dict, standing, total, cells: list, manual: dict
             hints.append(f"{ex}: {v[1]}")
     judged = bool(rep.get("verdicts") or rep.get("completion"))
     out.append("<h2>Hints from the grader</h2>" + (
-        "<ul>" + "".join(f"<li>{_t(h, 2000)}</li>" for h in hints) + "</ul>" if hints else
+        "<ul>" + "".join(f"<li>{page_text(h, 2000)}</li>" for h in hints) + "</ul>" if hints else
         "<p>None: every hidden test and completion point of yours that was graded passed.</p>" if judged else
         "<p>None: no hidden test or completion point of yours was graded (the notes say why).</p>"))
 
@@ -294,29 +295,29 @@ def _summary(student: str, rep: dict, standing, total, cells: list, manual: dict
         items = []
         for (_, nb, g), r in mine:
             mx, score = held[(nb, g)]
-            pts = "not graded yet" if score is None or (nb, g) in waiting else f"{_num(score)} of {_num(mx)} points"
+            pts = "not graded yet" if score is None or (nb, g) in waiting else f"{num(score)} of {num(mx)} points"
             comment = (r.get("comment") or "").strip()
-            items.append(f"<li><strong>{_t(nb)} {_t(g)}</strong>: {pts}"
-                         + (f'<div class="comment">{_t(comment, 4000)}</div>' if comment else "") + "</li>")
+            items.append(f"<li><strong>{page_text(nb)} {page_text(g)}</strong>: {pts}"
+                         + (f'<div class="comment">{page_text(comment, 4000)}</div>' if comment else "") + "</li>")
         out.append("<h2>Graded by hand</h2><ul>" + "".join(items) + "</ul>")
 
     # notes
     if notes:
-        out.append("<h2>Notes on your hand-in</h2><ul>" + "".join(f"<li>{_t(n, 2000)}</li>" for n in notes) + "</ul>")
+        out.append("<h2>Notes on your hand-in</h2><ul>" + "".join(f"<li>{page_text(n, 2000)}</li>" for n in notes) + "</ul>")
 
     # pages
     if pages:
         out.append("<h2>Your notebooks' feedback pages</h2><p>Sent with this page: each notebook as graded, "
                    "with every test's verdict. Open them in a browser.</p><ul>"
-                   + "".join(f"<li><code>{_t(p)}</code></li>" for p in pages) + "</ul>")
+                   + "".join(f"<li><code>{page_text(p)}</code></li>" for p in pages) + "</ul>")
     else:
-        out.append(f"<h2>Your notebooks' feedback pages</h2><p>There are none: {_t(why_no_pages or '', 2000)}</p>")
+        out.append(f"<h2>Your notebooks' feedback pages</h2><p>There are none: {page_text(why_no_pages or '', 2000)}</p>")
 
     page = ("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n"
             f'<meta http-equiv="Content-Security-Policy" content="{CSP}">\n'
             '<meta charset="utf-8">\n<meta name="viewport" content="width=device-width, initial-scale=1">\n'
             '<meta name="referrer" content="no-referrer">\n<link rel="icon" href="data:,">\n'
-            f"<title>Feedback: {_t(ASSIGNMENT)}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n"
+            f"<title>Feedback: {page_text(ASSIGNMENT)}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n"
             + "\n".join(out) + "\n</body>\n</html>\n")
     return page.encode("utf-8"), withheld
 
@@ -386,7 +387,7 @@ def gather(course: Path, report: dict) -> list[StudentReturn]:
         st = standings.get(s)
         summary, withheld = _summary(s, rep, st, total, sorted(cells.get(s, [])), manual, sorted(pages),
                                      None if pages else _why_no_pages(rep, st))
-        out.append(StudentReturn(s, _lms(rep), summary, pages, withheld))
+        out.append(StudentReturn(s, lms_record(rep), summary, pages, withheld))
     return out
 
 
@@ -398,7 +399,7 @@ def _digits(text) -> bool:
 def canvas_name_part(name) -> str:
     """The name part of a Canvas re-upload file name: word characters only, no ``_`` (the ids are
     found as the first all-digit ``_`` parts), never empty, never all digits."""
-    text = "".join(c for c in unicodedata.normalize("NFC", str(name or "")).lower() if _word(c) and c != "_")
+    text = "".join(c for c in unicodedata.normalize("NFC", str(name or "")).lower() if word_char(c) and c != "_")
     text = text[:NAME_CHARS]           # a member name stays far below the 255 bytes a file name may hold
     return text if text and not text.isdigit() else "student"
 
@@ -406,7 +407,7 @@ def canvas_name_part(name) -> str:
 def canvas_entries(r: StudentReturn) -> list[tuple[str, bytes]] | str:
     """[(member name, bytes)] of this student in the Canvas re-upload zip, or why none."""
     ids = (r.lms or {}).get("ids") or {}
-    uid, aid = _ident(ids.get("user_id")), _ident(ids.get("attachment_id"))
+    uid, aid = ident(ids.get("user_id")), ident(ids.get("attachment_id"))
     if uid is None or not _digits(uid):
         return ("anonymous grading: Canvas's download names the student by an anonymous id, which Re-Upload "
                 "Submissions cannot match" if uid and uid.startswith("anon_") else
@@ -414,16 +415,16 @@ def canvas_entries(r: StudentReturn) -> list[tuple[str, bytes]] | str:
     kept = (r.lms or {}).get("attachment_ids")
     per_nb = kept if isinstance(kept, dict) else {}
     if aid is None or not _digits(aid):
-        aid = next((v for v in map(_ident, per_nb.values()) if v and _digits(v)), None)
+        aid = next((v for v in map(ident, per_nb.values()) if v and _digits(v)), None)
     if aid is None:
         return "no Canvas file id of their submission (Re-Upload Submissions matches a file of it)"
     name = canvas_name_part(r.lms.get("name"))
     out = []
     for file, data in r.files():
-        own = _ident(per_nb.get(file[:-len(".html")] + ".ipynb")) if file != SUMMARY else None
+        own = ident(per_nb.get(file[:-len(".html")] + ".ipynb")) if file != SUMMARY else None
         member = f"{name}_{uid}_{own if own and _digits(own) else aid}_{file}"
         # the name must read back as Canvas's download naming does (lms_layouts), with these ids first
-        if not any(x["uid"] == uid and x["aid"] == member.split("_")[2] for x in _canvas_splits(member, False)):
+        if not any(x["uid"] == uid and x["aid"] == member.split("_")[2] for x in canvas_splits(member, False)):
             return f"its Canvas name {member!r} would not read back as user {uid}"
         out.append((member, data))
     return out
@@ -440,20 +441,20 @@ def moodle_full_name(name) -> str:
 
 
 def moodle_entries(r: StudentReturn) -> list[tuple[str, bytes]] | str:
-    pid = _ident(((r.lms or {}).get("ids") or {}).get("participant_id"))
+    pid = ident(((r.lms or {}).get("ids") or {}).get("participant_id"))
     if pid is None or not _digits(pid):
         return f"no Moodle participant id usable by the feedback zip ({pid!r})"
     prefix = f"{moodle_full_name(r.lms.get('name'))}_{pid}_{MOODLE_PLUGIN}_"
     out = [(prefix + file, data) for file, data in r.files()]
     for member, _ in out:            # read back as Moodle's download naming is read (lms_layouts)
-        m = _MOODLE_FLAT.match(member)
+        m = MOODLE_FLAT.match(member)
         if not m or m["pid"] != pid or m["file"] != member[len(prefix):]:
             return f"its Moodle name {member!r} would not read back as participant {pid}"
     return out
 
 
 def blackboard_entries(r: StudentReturn) -> list[tuple[str, bytes]] | str:
-    user = _ident(((r.lms or {}).get("ids") or {}).get("username"))
+    user = ident(((r.lms or {}).get("ids") or {}).get("username"))
     if user is None or not _safe_id(user) or user.startswith((".", "~")):
         return f"no Blackboard username usable as a file name ({user!r})"
     return [(f"{user}_{file}", data) for file, data in r.files()]
@@ -532,7 +533,7 @@ def write_feedback_return(course: Path, report: dict, log=print) -> list[Path]:
     for r in students:
         system = (r.lms or {}).get("system")
         if system in ENTRIES:
-            key = _ident(((r.lms.get("ids") or {}).get(KEYS[system])))
+            key = ident(((r.lms.get("ids") or {}).get(KEYS[system])))
             claims.setdefault((system, key or ""), []).append(r.student)
     twice = {s for (_, key), ss in claims.items() if key and len(ss) > 1 for s in ss}
     for r in students:
@@ -573,9 +574,9 @@ def write_feedback_return(course: Path, report: dict, log=print) -> list[Path]:
     else:
         (out_dir / GENERIC_ZIP).unlink(missing_ok=True)
     readme = _readme(students, packages, generic, left)
-    _write_atomic(out_dir / README, readme.encode("utf-8"))
+    write_atomic(out_dir / README, readme.encode("utf-8"))
     written.append(out_dir / README)
-    _write_atomic(out_dir / REPORT_JSON, json.dumps(_jsonable(report), indent=1, sort_keys=True,
+    write_atomic(out_dir / REPORT_JSON, json.dumps(_jsonable(report), indent=1, sort_keys=True,
                                                     default=str).encode("utf-8"))
     written.append(out_dir / REPORT_JSON)
     for system, items in packages.items():
@@ -633,7 +634,7 @@ def _readme(students, packages, generic, left) -> str:
 # --- the command line -------------------------------------------------------------------------------
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--course", type=Path, default=HERE, help="nbgrader course folder (default: autograde/)")
+    p.add_argument("--course", type=Path, default=COURSE_DIR, help="the graded course folder (default: course/)")
     args = p.parse_args(argv)
     saved = args.course / RETURN_DIR / REPORT_JSON
     if not saved.is_file():

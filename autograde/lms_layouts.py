@@ -171,7 +171,7 @@ class LmsFile:
     receipt: dict = field(default_factory=dict)   # Blackboard receipts: name, username, submitted, submitted_text
 
 
-def _word(c: str) -> bool:
+def word_char(c: str) -> bool:
     """Ruby's [[:word:]]: letters, marks, digits, connector punctuation (``_``)."""
     return c.isalnum() or c == "_" or unicodedata.category(c)[0] in "MN" or unicodedata.category(c) == "Pc"
 
@@ -186,7 +186,7 @@ _CANVAS_UUID = re.compile(r"-[0-9a-f]{8}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{4}-[0-
 _CANVAS_IDS = re.compile(r"(?P<uid>\d+)_(?:(?P<aid>\d+)_|(?P<made>text|link)\.html$)")
 
 
-def _canvas_splits(base: str, anonymous: bool) -> list[dict]:
+def canvas_splits(base: str, anonymous: bool) -> list[dict]:
     """Every way Canvas could have written ``base``: [{name, uid, aid, display, made, late, marker}].
 
     A name Canvas wrote is lowercased word characters (``-`` too in the old format) and never
@@ -196,7 +196,7 @@ def _canvas_splits(base: str, anonymous: bool) -> list[dict]:
         m = _CANVAS_ANON.match(base)
         return [{"name": None, "uid": f"anon_{m['anon']}", "aid": m["aid"], "display": m["display"],
                  "made": m["made"], "late": bool(m["late"]), "marker": "LATE" if m["late"] else ""}] if m else []
-    bad = next((i for i, c in enumerate(base) if not (_word(c) or c == "-") or "A" <= c <= "Z"), len(base))
+    bad = next((i for i, c in enumerate(base) if not (word_char(c) or c == "-") or "A" <= c <= "Z"), len(base))
     ids_inside = re.search(r"_\d+_", base)
     limit = min(bad, ids_inside.end() - 1 if ids_inside else len(base))   # a name ends before both
     out = []
@@ -238,7 +238,7 @@ def _read_canvas(members: list[list[str]], parse_notebook: NotebookParser) -> tu
         nb = parse_notebook(_canvas_display(s["display"]))
         return 2 if nb and nb[0] is None else 1 if nb else 0
 
-    splits = [_canvas_splits(b, anonymous) if len(p) == 1 else [] for p, b in zip(members, bases)]
+    splits = [canvas_splits(b, anonymous) if len(p) == 1 else [] for p, b in zip(members, bases)]
     # The students' own files vouch for a reading: a (user id, name) that other files read the same way.
     support = Counter()
     provisional = []
@@ -279,7 +279,7 @@ def _read_canvas(members: list[list[str]], parse_notebook: NotebookParser) -> tu
             f.rank = (int(s["aid"]),)
             f.label = f"{base!r} (Canvas file id {s['aid']})"
             # their file's own name, read as Canvas's name of a notebook of somebody else's
-            named = {t["uid"] for t in _canvas_splits(f.original, anonymous=False) if score(t) == 2}
+            named = {t["uid"] for t in canvas_splits(f.original, anonymous=False) if score(t) == 2}
             if named and s["uid"] not in named:
                 f.claims = sorted(named)[0]
         out.append(f)
@@ -289,14 +289,14 @@ def _read_canvas(members: list[list[str]], parse_notebook: NotebookParser) -> tu
 # --- Moodle --------------------------------------------------------------------------------------
 _MOODLE_PREFIX = r"(?P<name>[^_]*)_(?P<pid>\d+)_assignsubmission_(?P<plugin>[a-z0-9]+)"
 _MOODLE_FOLDER = re.compile(rf"^{_MOODLE_PREFIX}_?$", re.S)
-_MOODLE_FLAT = re.compile(rf"^{_MOODLE_PREFIX}_(?P<file>.+)$", re.S)
+MOODLE_FLAT = re.compile(rf"^{_MOODLE_PREFIX}_(?P<file>.+)$", re.S)
 
 
 def _read_moodle(members: list[list[str]], parse_notebook: NotebookParser) -> tuple[list, list[str]]:
     out = []
     for p in members:
         folder = _MOODLE_FOLDER.match(p[0]) if len(p) >= 2 else None
-        flat = _MOODLE_FLAT.match(p[0]) if len(p) == 1 else None
+        flat = MOODLE_FLAT.match(p[0]) if len(p) == 1 else None
         m = folder or flat
         if not m:
             out.append("it is not named as Moodle names the files of a download (<full name>_<participant "
@@ -305,10 +305,10 @@ def _read_moodle(members: list[list[str]], parse_notebook: NotebookParser) -> tu
             continue
         f = LmsFile("moodle", m["pid"], m["name"].strip(), p[-1] if folder else m["file"], label=repr("/".join(p)))
         for sub in p[1:-1]:                      # a subfolder named as another participant's folder
-            c = _MOODLE_FOLDER.match(sub) or _MOODLE_FLAT.match(sub)
+            c = _MOODLE_FOLDER.match(sub) or MOODLE_FLAT.match(sub)
             if c and c["pid"] != f.lms_id:
                 f.claims = c["pid"]
-        c = _MOODLE_FLAT.match(f.original)
+        c = MOODLE_FLAT.match(f.original)
         if c and c["pid"] != f.lms_id:
             f.claims = c["pid"]
         elif c:
@@ -461,9 +461,9 @@ def looks_like(parts: list[str], parse_notebook: NotebookParser) -> set[str]:
         return not display.casefold().endswith(".ipynb") or parse_notebook(display) is not None
 
     if len(parts) == 1 and _CANVAS_LOOSE.match(parts[0]) and \
-            any(map(canvas_file, _canvas_splits(parts[0], False) + _canvas_splits(parts[0], True))):
+            any(map(canvas_file, canvas_splits(parts[0], False) + canvas_splits(parts[0], True))):
         s.add("canvas")
-    if (len(parts) >= 2 and _MOODLE_FOLDER.match(parts[0])) or (len(parts) == 1 and _MOODLE_FLAT.match(parts[0])):
+    if (len(parts) >= 2 and _MOODLE_FOLDER.match(parts[0])) or (len(parts) == 1 and MOODLE_FLAT.match(parts[0])):
         s.add("moodle")
     if len(parts) == 1 and _BB.match(parts[0]):
         s.add("blackboard")
@@ -483,7 +483,7 @@ def _canvas_vouched(parts: list[list[str]], looks: list[set[str]], parse_noteboo
     def readings(base, strict):
         out = set()
         for anonymous in (False, True):
-            for x in _canvas_splits(base, anonymous):
+            for x in canvas_splits(base, anonymous):
                 if x["made"] or not strict or parse_notebook(_canvas_display(x["display"])) is not None:
                     out.add((x["uid"], x["name"]))
         return out
@@ -494,7 +494,7 @@ def _canvas_vouched(parts: list[list[str]], looks: list[set[str]], parse_noteboo
             vouchers |= readings(p[0], strict=True)
     def shaped(base):        # <name>_<user id>_<file id>_<file>, whose whole name reads as no <student>_<notebook>
         return parse_notebook(base) is None and any(
-            x["aid"] for anonymous in (False, True) for x in _canvas_splits(base, anonymous))
+            x["aid"] for anonymous in (False, True) for x in canvas_splits(base, anonymous))
 
     return [i for i, (p, one) in enumerate(zip(parts, looks))
             if "canvas" not in one and len(p) == 1 and _CANVAS_LOOSE.match(p[0])

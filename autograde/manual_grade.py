@@ -1,7 +1,7 @@
 """Enter manual grades headless; they are kept in manual_grades.csv and survive every regrade.
 
     python -m autograde.manual_grade STUDENT NOTEBOOK GRADE_ID SCORE [--comment "..."]
-    python -m autograde.manual_grade --from-csv autograde/to_grade.csv
+    python -m autograde.manual_grade --from-csv course/to_grade.csv
 
 e.g. ``python -m autograde.manual_grade s042 04_imagination_gap ex1_sentence 1 --comment "Clear."``
 The second form applies every row of the hand-grading sheet (``to_grade.py``) whose ``score`` is
@@ -29,7 +29,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from .course import ASSIGNMENT, COURSE_ID, HERE, course_lock
+from .course import ASSIGNMENT, COURSE_DIR, COURSE_ID, course_lock
 from .feedback import generate_feedback
 
 FIELDS = ["student_id", "notebook", "grade_id", "score", "comment"]
@@ -47,7 +47,7 @@ class Entry:
 
 
 def set_manual_grade(student: str, notebook: str, grade_id: str, score: float, comment: str = "",
-                     course: Path = HERE, jobs: int = 1) -> None:
+                     course: Path = COURSE_DIR, jobs: int = 1) -> None:
     """Record one grade in manual_grades.csv and in the gradebook, and refresh that student's pages
     and grades.csv; raise ValueError (naming the nearest real ids) if it cannot be entered."""
     entry = Entry(student, notebook.removesuffix(".ipynb"), grade_id, score, comment)
@@ -59,7 +59,7 @@ def set_manual_grade(student: str, notebook: str, grade_id: str, score: float, c
         _apply(Path(course), [entry], jobs=jobs, log=_stderr, unchanged_skip=False)
 
 
-def apply_sheet(sheet: Path, course: Path = HERE, jobs: int | None = None, log=print) -> dict:
+def apply_sheet(sheet: Path, course: Path = COURSE_DIR, jobs: int | None = None, log=print) -> dict:
     """Apply every filled row of the hand-grading sheet ``sheet`` (to_grade.csv) to ``course``.
 
     Returns {"applied": [Entry], "unchanged": [Entry], "skipped": [line], "students": [touched],
@@ -186,7 +186,7 @@ def _apply(course: Path, entries: list[Entry], jobs: int, log, unchanged_skip: b
     from nbgrader.api import Gradebook, MissingEntry
 
     from .gradebook import export_csv, read_manual
-    from .lms_export import _write_atomic
+    from .text import write_atomic
     from .to_grade import mark_scheme
 
     manual = read_manual(course)
@@ -212,7 +212,7 @@ def _apply(course: Path, entries: list[Entry], jobs: int, log, unchanged_skip: b
         w = csv.DictWriter(buf, FIELDS, extrasaction="ignore")
         w.writeheader()
         w.writerows(manual[k] for k in sorted(manual))
-        _write_atomic(course / "manual_grades.csv", buf.getvalue().encode("utf-8"))
+        write_atomic(course / "manual_grades.csv", buf.getvalue().encode("utf-8"))
         for e in applied:
             grade = grades[(e.student, e.notebook, e.grade_id)]
             grade.manual_score = e.score
@@ -268,7 +268,7 @@ def main(argv=None) -> int:
     p.add_argument("--from-csv", type=Path, metavar="TO_GRADE_CSV",
                    help="apply every row of this sheet whose score is filled (to_grade.csv)")
     p.add_argument("--jobs", type=int, default=None, help="feedback processes at once (default: one per core)")
-    p.add_argument("--course", type=Path, default=HERE)
+    p.add_argument("--course", type=Path, default=COURSE_DIR, help="the graded course folder (default: course/)")
     args = p.parse_args(argv)
     if args.from_csv is not None:
         if args.student is not None:

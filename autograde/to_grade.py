@@ -5,7 +5,7 @@
 
 then, once the ``score`` (and ``comment``) cells are filled in a spreadsheet,
 
-    python -m autograde.manual_grade --from-csv autograde/to_grade.csv
+    python -m autograde.manual_grade --from-csv course/to_grade.csv
 
 applies every filled row at once (``manual_grade.apply_sheet``). This module is the sheet: its
 columns, writing it from the gradebook and the autograded notebooks, and reading it back.
@@ -16,7 +16,7 @@ markdown grade cell, or a grade cell that is also a solution cell: the same test
 ``lms_export.read_standings``), and a test cell whose verdict the tripwire left to a human
 (``report[s]["undecided"]``) or that a person already decided (``manual_grades.csv``). A notebook
 that was never graded (not handed in) has no rows. Each row carries the student's display name
-(the LMS's, ``lms_export._name``) beside the id, the answer as written (from
+(the LMS's, ``lms_export.student_label``) beside the id, the answer as written (from
 ``<course>/autograded/<student>/<assignment>/<notebook>.ipynb``, read without following a link and
 size-capped like the class report's notebooks, one line, at most ``ANSWER_CHARS``), the mark scheme
 (``mark_scheme.yaml``), the points, the grade and comment already entered, and blank ``score`` and
@@ -24,8 +24,8 @@ size-capped like the class report's notebooks, one line, at most ``ANSWER_CHARS`
 can be applied and filled further.
 
 Safe in a spreadsheet: UTF-8 with a byte-order mark and CRLF, as the LMS import files
-(``lms_export._write_csv``); control characters removed and any cell that starts with ``= + - @``
-prefixed with ``'`` (``lms_export._FORMULA``), so a student's answer such as ``=HYPERLINK(...)``
+(``text.write_csv``); control characters removed and any cell that starts with ``= + - @``
+prefixed with ``'`` (``text.FORMULA``), so a student's answer such as ``=HYPERLINK(...)``
 is shown as text, never run as a formula. Reading it back accepts what a spreadsheet may save
 instead: no byte-order mark, Windows-1252, ``;`` or tab as separator, a decimal comma in a score.
 """
@@ -41,7 +41,8 @@ from pathlib import Path
 import yaml
 
 from .course import ASSIGNMENT, COURSE_ID, HERE
-from .lms_export import _FORMULA, _clean_text, _name, _num, _write_csv
+from .lms_export import student_label
+from .text import FORMULA, clean_text, num, write_csv
 
 TO_GRADE_FILE = "to_grade.csv"
 
@@ -77,7 +78,7 @@ def write_to_grade(course: Path, report: dict, log=print) -> Path:
     rows = [_row(report, course, scheme, manual, *item) for item in _cells(course, report, set(manual))]
     rows.sort(key=lambda r: (r["notebook"], r["grade_id"], r["student_id"]))
     path = course / TO_GRADE_FILE
-    _write_csv(path, COLUMNS, [[_cell(r[c]) for c in COLUMNS] for r in rows])
+    write_csv(path, COLUMNS, [[_cell(r[c]) for c in COLUMNS] for r in rows])
     return path
 
 
@@ -163,13 +164,13 @@ def _row(report, course, scheme, manual, student, notebook, grade_id, max_score,
     if status == NEEDS_A_HUMAN:
         why = next((w for w in rep.get("tripwires") or () if str(w).startswith(f"{notebook} {grade_id}:")), "")
         answer = "(a function: see the student's feedback page)"
-        scheme_text = f"NEEDS A HUMAN: {why} Score {_num(max_score)} if the function is right, else 0."
+        scheme_text = f"NEEDS A HUMAN: {why} Score {num(max_score)} if the function is right, else 0."
     else:
         answer = "" if status == NO_ANSWER else read_answer(course, student, notebook, grade_id)
         scheme_text = str(scheme.get(grade_id) or "")
-    return {"student_name": _name(rep, student), "student_id": student, "notebook": notebook,
-            "grade_id": grade_id, "status": status, "max_score": _num(max_score),
-            "current_score": _shown(entered.get("score")) if entered else (_num(score) if score is not None else ""),
+    return {"student_name": student_label(rep, student), "student_id": student, "notebook": notebook,
+            "grade_id": grade_id, "status": status, "max_score": num(max_score),
+            "current_score": _shown(entered.get("score")) if entered else (num(score) if score is not None else ""),
             "score": "", "comment": "", "answer": answer, "mark_scheme": scheme_text,
             "current_comment": entered.get("comment") or ""}
 
@@ -177,7 +178,7 @@ def _row(report, course, scheme, manual, student, notebook, grade_id, max_score,
 def _shown(score) -> str:
     """A score from manual_grades.csv as the sheet shows points ('1.0' -> '1'); as written if not a number."""
     try:
-        return _num(float(score))
+        return num(float(score))
     except (TypeError, ValueError):
         return str(score or "")
 
@@ -198,7 +199,7 @@ def read_answer(course: Path, student: str, notebook: str, grade_id: str) -> str
         if isinstance(cell, dict) and gid(cell) == grade_id:
             src = cell.get("source", "")
             src = "".join(s for s in src if isinstance(s, str)) if isinstance(src, list) else str(src)
-            text = _clean_text(src[:ANSWER_CHARS * 4])
+            text = clean_text(src[:ANSWER_CHARS * 4])
             if len(text) > ANSWER_CHARS:
                 text = text[:ANSWER_CHARS] + f" [... cut at {ANSWER_CHARS} characters: the feedback page has it all]"
             return text
@@ -207,14 +208,14 @@ def read_answer(course: Path, student: str, notebook: str, grade_id: str) -> str
 
 def _cell(value) -> str:
     """A value as a spreadsheet shows it: one line, no control characters, never a formula."""
-    text = _clean_text(str(value))
-    return "'" + text if text.startswith(_FORMULA) else text
+    text = clean_text(str(value))
+    return "'" + text if text.startswith(FORMULA) else text
 
 
 def _uncell(text: str) -> str:
     """What ``_cell`` wrote, back (the id columns: ``'`` before a formula character comes off)."""
     text = text.strip()
-    return text[1:] if text.startswith("'") and text[1:].startswith(_FORMULA) else text
+    return text[1:] if text.startswith("'") and text[1:].startswith(FORMULA) else text
 
 
 def read_sheet(path: Path) -> tuple[list[tuple[int, dict]], list[str]]:

@@ -378,7 +378,7 @@ def test_scores_and_tests(klass):
         assert int(row["data-full"]) == graded - sum(fails.values())
         case = fails.most_common(1)[0][0]
         hint = f"check {case}: {checks.TESTS[tid].cases[case - 1].hint}"
-        assert class_report._t(hint, 600) in klass["html"], (tid, hint)
+        assert class_report.page_text(hint, 600) in klass["html"], (tid, hint)
     # the grader's hints only: nothing a student's function raised
     assert "alert(&#x27;mine&#x27;)" not in klass["html"] and "alert('mine')" not in klass["html"]
 
@@ -431,7 +431,7 @@ def test_no_student_code_and_no_hidden_test(klass):
     con.close()
     assert len(lines) > 200 and len(hidden) >= 5
     for line in lines | hidden | stored:
-        for form in {line, class_report._t(line, 10**6)}:
+        for form in {line, class_report.page_text(line, 10**6)}:
             assert form not in body, f"code in the page: {line!r}"
     assert "PREDICTION =" not in text and "### BEGIN" not in text and "grading.submit" not in text
     for t in checks.TESTS.values():                 # the hidden cases themselves (their probes)
@@ -457,7 +457,7 @@ def test_hostile_strings_are_escaped_and_only_flagged_ids_appear(klass):
     flagged = {s for s in klass["report"] if s in (HOSTILE, "stu_005", RENAMER, *LOOKALIKE) or
                (klass["report"][s].get("lms") or {}).get("late")}
     for s in klass["report"]:
-        assert (class_report._t(s, 128) in text) == (s in flagged), s
+        assert (class_report.page_text(s, 128) in text) == (s in flagged), s
     counts = {a["data-kind"]: int(a["data-count"]) for a in with_attr(p, "data-kind") if "data-count" in a}
     assert counts["look-alike id"] == 2 and counts["answer key"] == 1
     assert counts["file graded by content"] == counts["file not graded"] == 1

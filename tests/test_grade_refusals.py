@@ -56,3 +56,22 @@ def test_a_download_of_nobody_is_refused_and_changes_no_file(tmp_path, make):
     assert run.returncode != 0
     assert "holds no student's submission" in run.stderr and "no file was changed" in run.stderr
     assert snapshot(course) == before
+
+
+def test_every_command_writes_to_the_one_course_folder_unless_told_otherwise():
+    """The course folder is defined once (course.COURSE_DIR, course/ beside the package, never the
+    package itself); every command's --course defaults to it and make grade passes COURSE= on."""
+    import inspect
+
+    from autograde import course, grade, lms_feedback, manual_grade
+
+    assert course.COURSE_DIR == ROOT / "course" and course.COURSE_DIR != course.HERE
+    for fn in (grade.grade_class, manual_grade.apply_sheet, manual_grade.set_manual_grade):
+        assert inspect.signature(fn).parameters["course"].default == course.COURSE_DIR, fn
+    for module in (grade, lms_feedback, manual_grade):
+        assert "default=COURSE_DIR" in Path(module.__file__).read_text(), module
+    make = lambda *a: subprocess.run(["make", "-n", "grade", *a], cwd=ROOT, capture_output=True, text=True).stdout
+    assert "--course" not in make("SUBMISSIONS=x.zip")
+    assert '--course "/tmp/my course"' in make("SUBMISSIONS=x.zip", "COURSE=/tmp/my course")
+    assert (ROOT / ".gitignore").read_text().splitlines().count("/course/") == 1
+    assert "autograde/" not in (ROOT / ".gitignore").read_text()

@@ -523,15 +523,37 @@ def test_setup_fails_the_image_build_only_where_required_confinement_never_can_b
 
 
 def test_no_output_of_grading_a_class_goes_into_the_bundle():
-    """Every file a class's grading writes in the course folder (students' answers, names, scores,
-    feedback) stays out of the Gradescope bundle, and out of git."""
-    outputs = ["autograde/gradebook.db", "autograde/grades.csv", "autograde/report.csv", "autograde/manual_grades.csv",
-               "autograde/to_grade.csv", "autograde/to_grade.unapplied-20261206-154500.csv", "autograde/graded.json",
-               "autograde/canvas_import.csv", "autograde/moodle_import.csv", "autograde/lms_export_notes.txt",
-               "autograde/class_report.html", "autograde/feedback/canvas_1/ch3.2/02_reward.html",
-               "autograde/feedback_return/canvas_feedback_upload.zip", "autograde/feedback_return/report.json",
-               "autograde/autograded/canvas_1/ch3.2/02_reward.ipynb", "autograde/submitted/s1/ch3.2/02_reward.ipynb"]
-    assert [p for p in outputs if not gradescope.NOT_VENDORED.search(p)] == []
+    """Every file a class's grading writes (students' answers, names, scores, feedback) is in the
+    course folder, one folder outside every vendored path and ignored by git as a whole."""
+    from autograde.course import COURSE_DIR
+
+    assert COURSE_DIR == ROOT / "course"
+    outputs = ["gradebook.db", "gradebook.template.db", "grades.csv", "report.csv", "manual_grades.csv",
+               "to_grade.csv", "to_grade.unapplied-20261206-154500.csv", "graded.json", ".grading.lock",
+               "canvas_import.csv", "moodle_import.csv", "lms_export_notes.txt", "class_report.html",
+               "nbgrader_config.py", "feedback/canvas_1/ch3.2/02_reward.html",
+               "feedback_return/canvas_feedback_upload.zip", "feedback_return/report.json",
+               "shared_stages/expert.npz", "source/ch3.2/02_reward.ipynb", "release/ch3.2/02_reward.ipynb",
+               "autograded/canvas_1/ch3.2/02_reward.ipynb", "submitted/s1/ch3.2/02_reward.ipynb"]
+    outputs = [f"course/{p}" for p in outputs]
+    assert not [p for p in outputs if p.startswith(tuple(f"{top}/" for top in gradescope.VENDORED))]
     ignored = subprocess.run(["git", "-C", str(ROOT), "check-ignore", "--no-index", *outputs], capture_output=True,
                              text=True).stdout.split()
     assert sorted(ignored) == sorted(outputs)
+    assert (ROOT / ".gitignore").read_text().splitlines().count("/course/") == 1
+
+
+def test_the_bundle_vendors_no_untracked_data_nor_the_course_folder(tmp_path):
+    """An untracked file under a vendored path goes into the bundle only if it is Python source:
+    not an output left in autograde/ by a grading run from before the course folder moved (no
+    longer ignored there), nor anything of a course folder given inside the package."""
+    git = lambda *a: subprocess.run(["git", "-C", str(tmp_path), *a], check=True, capture_output=True)
+    git("init", "-q")
+    for rel in ("course.yaml", "autograde/grade.py", "autograde/old/grades.csv", "autograde/grades.csv",
+                "autograde/new_step.py", "autograde/feedback/s1/ch3.2/02_reward.html", "pusht/nb/times.json",
+                "autograde/mine/nbgrader_config.py", "autograde/mine/gradebook.db"):
+        (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / rel).write_text("x")
+    git("add", "course.yaml", "autograde/grade.py", "pusht/nb/times.json")
+    files = gradescope._vendored_files(tmp_path, course=tmp_path / "autograde" / "mine")
+    assert files == ["autograde/grade.py", "autograde/new_step.py", "course.yaml", "pusht/nb/times.json"]

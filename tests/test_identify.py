@@ -17,7 +17,7 @@ import pytest
 
 from autograde.classes import lms
 from autograde.identify import MIN_SHARE, Identifier
-from autograde.intake import _Names, collect
+from autograde.intake import NotebookNames, collect
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted(p.name for p in (ROOT / "notebooks").glob("*.ipynb"))
@@ -81,7 +81,7 @@ def test_any_renaming_is_graded_as_what_it_is(tmp_path, seed):
     for n, name in expect.items():
         assert got.students["s1"][n].member.endswith(name)
     renamed = {h["file"] for h in got.human if h["graded"]}
-    named = _Names(NOTEBOOKS)
+    named = NotebookNames(NOTEBOOKS)
     for n, name in expect.items():
         if named.parse(name) is None:           # its name says no notebook: its content did
             assert name in renamed and any(line.startswith(f"{name}: graded as {n}") for line in got.notes["s1"])
