@@ -30,6 +30,9 @@ when it fails.
 
 The runs come in as ``{(horizon, actor_seed): metrics}`` (``RunResult.metrics``); the helpers
 regroup them as ``{horizon: [value per actor seed]}``.
+
+The notebook imports everything from here. The claims live in ``horizon_claims``, Exercise 2 in
+``horizon_exercise``, the sentences in ``horizon_words``.
 """
 
 from __future__ import annotations
