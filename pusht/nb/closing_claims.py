@@ -13,7 +13,7 @@ import numpy as np
 
 from .claims import claim
 from .gap import register_expert_control
-from .stats import THIN_MARGIN, beyond, clear_of_threshold, outcome as _test_outcome
+from .stats import THIN_MARGIN, beyond, clear_of_threshold
 
 
 # --- the claims: every run-dependent sentence of notebook 06 is decided by one of these ---------------
@@ -59,12 +59,12 @@ def gap_reopened(*, sizes, ses, k, min_effect):
 
 @claim("06.change_up", "the quantity rose beyond k standard errors and by at least the minimum effect", control="round 0")
 def change_up(*, diff, se, k, min_effect, quantity=""):
-    return _test_outcome(diff, k * se, min_effect) == "up"
+    return beyond(diff, se, k, min_effect, +1)
 
 
 @claim("06.change_down", "the quantity fell beyond k standard errors and by at least the minimum effect", control="round 0")
 def change_down(*, diff, se, k, min_effect, quantity=""):
-    return _test_outcome(diff, k * se, min_effect) == "down"
+    return beyond(diff, se, k, min_effect, -1)
 
 
 @claim("06.dream_rosier", "the dream rated the policy above reality, beyond k standard errors and by at least the "
@@ -180,7 +180,7 @@ EXPERT_CONTROL = register_expert_control("06")
        "that never moves, beyond k standard errors of the difference and the minimum effect: the model learned "
        "something about this policy, not only grew gloomier everywhere", control="zero actions")
 def dream_fell_for_the_policy(*, diff, se, k, min_effect):
-    return _test_outcome(diff, k * se, min_effect) == "down"
+    return beyond(diff, se, k, min_effect, -1)
 
 
 @claim("06.model_better_on_policy_data", "from round 0 to the last round every error of the model on the policy's "
