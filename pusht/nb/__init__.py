@@ -1,14 +1,24 @@
 """Support modules of the six notebooks: one per notebook, each with the notebook's figures (one
-function per figure, returning the ``matplotlib`` figure), the small named functions that draw
-its conclusions from the measured numbers (thresholds derived from measured noise, with a comment
-saying which), and its self-check questions (``SELF_CHECKS``, see ``pusht.selfcheck``).
+function per figure, returning the ``matplotlib`` figure) and its self-check questions
+(``SELF_CHECKS``, see ``pusht.selfcheck``), and the notebook's one import surface:
 
     world_model  notebook 01      reward   notebook 02      actor    notebook 03
     gap          notebook 04      horizon  notebook 05      closing  notebook 06
 
-and the rooms they share: ``session`` (the set-up cell's ``setup``), ``stats`` (the tests behind
-every verdict, with the minimum effect that matters), ``claims`` (the registry of claims about a
-run, checked by ``make claims``) and ``timing`` (each notebook's measured time).
+Notebooks 03-06 keep the rest in rooms named after them, re-exported by the notebook's module:
+
+    <nb>_claims    the claims about the learner's run it registers (``@claim``; ``make claims``)
+    <nb>_words     the sentences it prints, each reading guarded by a claim
+    <nb>_exercise  its exercise: options, measured letter, reconciliation (gap, horizon, closing)
+    actor_measure  what notebook 03 measures (gradient reach, detach effects, rise tests)
+    gap_expert     notebook 04's controls in words (scripted expert, replayed pusher, data shift)
+    closing_changes, closing_fixes, closing_summary
+                   notebook 06's measured changes and metric keys; its fixes; its conclusion and summary
+
+and the rooms they all share: ``session`` (the set-up cell's ``setup``), ``stats`` (the tests behind
+every verdict, with the minimum effect that matters), ``fmt`` (how a number is printed in a
+sentence), ``claims`` (the registry of claims about a run, checked by ``make claims``) and
+``timing`` (each notebook's measured time).
 
 Figure functions are named ``fig_*``. Every notebook's set-up cell is one call, ``setup`` (module
 ``pusht.nb.session``): the notebook's config, its folders under ``OUT``, and its ``show``::

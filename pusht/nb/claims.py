@@ -132,7 +132,8 @@ def note_if_false(holds: bool, evaluate) -> str:
 
 
 def load_all() -> dict[str, Claim]:
-    """Import every notebook module that registers claims, and return the registry."""
+    """Import every notebook module that registers claims (each imports its ``<nb>_claims``
+    module, whose ``@claim`` predicates register on import), and return the registry."""
     from . import actor, closing, gap, horizon  # noqa: F401  (importing registers their claims)
 
     return REGISTRY
