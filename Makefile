@@ -4,6 +4,7 @@
 #   make run      the pipeline alone, seed 0, default config -> runs/seed0/metrics.json
 #   make release  regenerate the student notebooks/ from solutions/ (nbgrader)
 #   make grade    grade a class: make grade SUBMISSIONS=lms_download.zip [SCHEDULER=tcp://host:8786] [REGRADE=1]
+#                 [JOBS=n] [TIMEOUT=seconds per cell] [CONFINE=unconfined: trusted notebooks only, with a warning]
 #                 [COURSE=dir] -> course/ (or COURSE): grades.csv, report.csv, canvas_import.csv,
 #                 moodle_import.csv, class_report.html, to_grade.csv, feedback/, feedback_return/
 #   make gradescope  the Gradescope autograder zip -> runs/gradescope/autograder.zip [OUT=path.zip]
@@ -149,7 +150,9 @@ release: setup
 
 grade: setup sandbox icu
 	@test -n "$(SUBMISSIONS)" || (echo "usage: make grade SUBMISSIONS=path/to/submissions.zip" && exit 2)
-	$(PY) -m autograde.grade "$(SUBMISSIONS)" $(if $(COURSE),--course "$(COURSE)") $(if $(SCHEDULER),--scheduler $(SCHEDULER)) $(if $(REGRADE),--regrade)
+	$(PY) -m autograde.grade "$(SUBMISSIONS)" $(if $(COURSE),--course "$(COURSE)") $(if $(SCHEDULER),--scheduler $(SCHEDULER)) \
+	  $(if $(REGRADE),--regrade) $(if $(JOBS),--jobs $(JOBS)) $(if $(TIMEOUT),--timeout $(TIMEOUT)) \
+	  $(if $(filter unconfined,$(CONFINE)),--no-confine)
 
 # The Gradescope autograder (autograde/gradescope.py): setup.sh and run_autograder at the zip's root,
 # what grading needs of this package at the commit built (no solutions, tests or site builder). Upload

@@ -75,3 +75,14 @@ def test_every_command_writes_to_the_one_course_folder_unless_told_otherwise():
     assert '--course "/tmp/my course"' in make("SUBMISSIONS=x.zip", "COURSE=/tmp/my course")
     assert (ROOT / ".gitignore").read_text().splitlines().count("/course/") == 1
     assert "autograde/" not in (ROOT / ".gitignore").read_text()
+
+
+def test_make_grade_passes_jobs_timeout_and_confinement_on_only_when_given():
+    make = lambda *a: " ".join(subprocess.run(["make", "-n", "grade", "SUBMISSIONS=x.zip", *a], cwd=ROOT,
+                                              capture_output=True, text=True).stdout.split())
+    plain = make()
+    assert "autograde.grade \"x.zip\"" in plain.replace("\\", "")
+    assert not any(flag in plain for flag in ("--jobs", "--timeout", "--no-confine"))
+    given = make("JOBS=3", "TIMEOUT=60", "CONFINE=unconfined")
+    assert "--jobs 3" in given and "--timeout 60" in given and "--no-confine" in given
+    assert "--no-confine" not in make("CONFINE=yes")      # only the word that says it
