@@ -85,6 +85,7 @@ import nbformat
 
 from . import lms_layouts
 from .identify import Identifier
+from .lms import plugin as lms_plugin
 from .lms_layouts import LayoutError  # noqa: F401  (the download cannot be read: grade.main says why)
 
 MB = 2 ** 20
@@ -756,7 +757,7 @@ def _pick_newest(candidates: list[_Candidate], ids: dict[str, str], intake: Inta
         intake.students.setdefault(sid, {})[notebook] = Upload(data, c.entry.member, c.entry.mtime)
         ignored = group[group.index(c) + 1:]     # older than the graded one
         if len(group) > 1:
-            newest = "the newest" if c.lms is None else _NEWEST[c.lms.system]
+            newest = "the newest" if c.lms is None else lms_plugin(c.lms.system).newest
             blanks = [x for x in group if x.blank and x is not c]
             if not c.blank and any(x.newness() > c.newness() for x in blanks):
                 newest = ("the newest that holds answers; " + ", ".join(x.short() for x in blanks)
@@ -792,10 +793,6 @@ def _stem(c: _Candidate) -> str:
     """One name for a file and its re-uploads: the notebook its name names, else its own name less
     the re-upload marks (``05_horizon_final-1.ipynb`` and ``05_horizon_final.ipynb`` are one)."""
     return c.by_name or reupload(_base(c))[0]
-
-
-_NEWEST = {"canvas": "the newest (Canvas numbers the files it keeps in the order they were uploaded)",
-           "moodle": "the newest", "blackboard": "from the latest attempt that holds it"}
 
 
 def _finish(intake: Intake, ids: dict[str, str], pending_notes: list[tuple[str, str]]) -> Intake:
@@ -902,9 +899,10 @@ def _collect_lms(usable: list[_Entry], system: str, wrapped: bool, names: Notebo
     for who, sid in ids.items():
         graded = [c.lms for (s, _), c in chosen.items() if s == sid]
         record, notes = lms_layouts.summarise(system, files_of[who], graded)
-        # Canvas: each graded notebook's own upload, for returning its page under its name (lms_feedback)
-        record["attachment_ids"] = {nb: c.lms.file_id for (s, nb), c in sorted(chosen.items())
-                                    if s == sid and c.lms.file_id} if system == "canvas" else None
+        # Canvas: each graded notebook's own upload, for returning its page under its name (lms_feedback);
+        # None for an LMS that returns no page by its upload
+        record["attachment_ids"] = lms_plugin(system).notebook_ids(
+            [(nb, c.lms) for (s, nb), c in sorted(chosen.items()) if s == sid])
         intake.lms[sid] = record
         intake.notes.setdefault(sid, [])[:0] = notes
     return _finish(intake, ids, pending_notes)
