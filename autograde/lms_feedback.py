@@ -43,80 +43,11 @@ a temporary file, then renamed over the old one.
 What each LMS takes back, and where that was read
 -------------------------------------------------
 
-**Canvas** (*Re-Upload Submissions*). Instructure's source, ``app/models/assignment.rb``
-(https://github.com/instructure/canvas-lms/blob/master/app/models/assignment.rb, the stored
-version read has ``Submission.active`` and ``grants_right?``):
-``generate_comments_from_files`` ("Takes a zipped file full of assignment comments/annotated
-assignments and generates comments on each assignment's submission. Quietly ignore (for now) files
-that don't make sense to us. The convention for file naming ... is
-last_name_first_name_user_id_attachment_id") unzips the upload and for every file calls
-``infer_comment_context_from_filename``::
-
-    filename = File.basename(fullpath)
-    split_filename = filename.split('_')
-    user_id, attachment_id = split_filename.grep(/^\\d+$/).take(2)
-    attachment_id = nil if split_filename.last =~ /^link/ || filename =~ /^\\._/
-    ...
-    if !attachment || !submission || !attachment.grants_right?(user, :read) ||
-       !submission.attachments.where(:id => attachment_id).exists?
-      @ignored_files << fullpath
-
-so a file is matched by the first two ``_``-separated parts that are all digits: the Canvas user
-id, then the id of a file (attachment) of that user's *current* submission, exactly the two
-numbers Canvas's *Download Submissions* writes (``lms_layouts``: ``<name>[_LATE]_<user id>_<file
-id>_<display name>``) and ``intake`` keeps (``ids.user_id``, ``ids.attachment_id``: the newest
-graded file). Any other file is ignored (``@ignored_files``, which the method returns beside
-the comments made). The files of one user become ONE submission
-comment, "See attached files", hidden while the assignment is muted. Each file is attached with
-``FileInContext.attach(self, g[:filename], g[:display_name])`` where ``display_name`` is the
-*submitted* file's display name: Canvas shows every returned file under the name of the student's
-upload whose id it carries (confirmed by https://github.com/instructure/canvas-lms/issues/2406,
-2024: a returned ``..._feedback.pdf`` shows as ``zipsubmission.zip``). So this package writes,
-per student, ``<name>_<user id>_<attachment id>_summary.html`` and
-``<name>_<user id>_<attachment id>_<notebook>.html``: ``<name>`` is Canvas's own (lowercased
-word characters as its download wrote it) with every ``_`` and non-word character removed, and
-``student`` when nothing is left or when it is all digits (it would be read as the user id); the
-record's ``attachment_ids`` ({notebook file name: that upload's file id}, kept by intake) gives
-each notebook's page its own notebook's upload id, so it shows under that notebook's name (the
-summary goes with the newest upload, ``ids.attachment_id``). Inferred, not verified on a live Canvas: that a ``.html`` shown under an
-``.ipynb`` display name opens as a page (``Attachment.mimetype`` is given the extracted file's
-own name, ``.html``); README.txt tells the instructor that students see their upload's name.
-An anonymous assignment's id (``anon_<id>``) is no user id: those students go to
-``feedback_by_student.zip``.
-
-**Moodle** (*Upload multiple feedback files in a zip*). Source
-``mod/assign/feedback/file/importziplib.php``
-(https://github.com/moodle/moodle/blob/main/mod/assign/feedback/file/importziplib.php),
-``is_valid_filename_for_import``: every part of the member's path is split with
-``explode('_', $pathpart, 5)``; "Expected format for the directory names in $pathpart is
-fullname_userid_plugintype_pluginname (as created by zip export in Moodle >= 4.1) resp.
-fullname_userid_plugintype_pluginname_ (as created by earlier versions)"; ``$info[1]`` must be a
-participant id (``get_uniqueid_for_user``, the number of the download, kept by intake as
-``ids.participant_id``) of a participant of the group shown, ``$info[2]``/``$info[3]`` a plugin
-of the assignment (``get_plugin_by_type``), and what follows is the file name; names starting with
-``.`` or ``~`` are skipped. Moodle's own test (``tests/importziplib_test.php``) accepts
-``'Student Name_' . $studentid . '_assignsubmission_file_My_cool_filename.txt'`` as the file
-``My_cool_filename.txt``. A file that differs from the one of that name already there (content
-hash, ``is_file_modified``) is stored as the student's feedback file and the student is notified
-(``notify_grade_modified``); an unchanged one is skipped. The help string (``lang/en``,
-``feedbackzip_help``): "Feedback files will be assigned to students based on the participant id
-which should be the second part of each filename immediately after the users full name." So each
-member here is ``<full name>_<participant id>_assignsubmission_file_<file>`` (flat: the folder
-form's path is joined back with a leading ``/``), with ``<full name>`` Moodle's download name with
-``_`` and control characters made spaces (Moodle's ``get_student_prefix`` also turns ``_`` into
-spaces, ``downloader.php``), the characters that ``clean_param($name, PARAM_FILE)`` removes
-removed (``lib/moodlelib.php``: ``preg_replace('~[[:cntrl:]]|[&<>"`\\|\\':\\\\\\\\/]~u', '', $param)``,
-a path separator among them), and no leading ``.``/``~``.
-
-**Blackboard Learn, Original courses.** No bulk return of feedback files was found: Anthology's
-help pages describe feedback files attached one attempt at a time on the Grade Attempt page
-(https://help.blackboard.com/Learn/Instructor/Grade/Grading_Tasks/Assign_Grades) and a bulk upload
-of *grades* only (Work Offline > Upload: "The unique identifier used for each Student is the
-Student's User Name", http://library.blackboard.com/ref/3ea64795-6ecc-4abd-b595-0a9a8dfdec94/Content/_instructor_grade_center/grade_center_upload_download.htm).
-Blackboard's code is closed, so this is what could be verified, not a proof. The package is a
-folder of ``<username>_summary.html`` and ``<username>_<notebook>.html`` (and the same as a zip),
-with README.txt saying to attach them on each student's attempt (Grade Center > the column >
-View Grade Details > Grade Attempt > Attach File).
+Each LMS's package, with the source or help pages read to decide its names, is in the docstring
+of its plug-in: ``autograde/lms/canvas.py`` (*Re-Upload Submissions*), ``autograde/lms/moodle.py``
+(*Upload multiple feedback files in a zip*) and ``autograde/lms/blackboard.py`` (no bulk return:
+files to attach by hand). This module holds what is the same for all of them: the summary page,
+the pages gathered, the zips and folders written, README.txt and report.json.
 """
 
 from __future__ import annotations
@@ -129,48 +60,29 @@ import stat
 import sys
 import tempfile
 import time
-import unicodedata
 import zipfile
-from dataclasses import dataclass, field
 from pathlib import Path
 
 from .class_report import CSP, display_name, gradebook_rows, hint_of, page_text
 from .course import ASSIGNMENT, COURSE_DIR, NOTEBOOKS
 from .files import read_capped
 from .gradebook import read_manual
-from .lms_export import lms_record, lms_settings, read_standings
-from .lms_layouts import MOODLE_FLAT, TITLE, canvas_splits, word_char
+from .lms import PLUGINS, TITLE
+from .lms.base import SUMMARY, StudentReturn, lms_record, safe_id  # noqa: F401  (SUMMARY: a public name, moved)
+from .lms.blackboard import FEEDBACK_DIR as BLACKBOARD_DIR  # noqa: F401  (a public name, moved)
+from .lms.blackboard import FEEDBACK_ZIP as BLACKBOARD_ZIP  # noqa: F401  (a public name, moved)
+from .lms.canvas import FEEDBACK_ZIP as CANVAS_ZIP  # noqa: F401  (a public name, moved)
+from .lms.moodle import FEEDBACK_ZIP as MOODLE_ZIP  # noqa: F401  (a public name, moved)
+from .lms_export import lms_settings, read_standings
 from .text import ident, num, write_atomic
 
 RETURN_DIR = "feedback_return"
-CANVAS_ZIP = "canvas_feedback_upload.zip"
-MOODLE_ZIP = "moodle_feedback_files.zip"
-BLACKBOARD_DIR = "blackboard_feedback"
-BLACKBOARD_ZIP = "blackboard_feedback.zip"
 GENERIC_ZIP = "feedback_by_student.zip"
 README = "README.txt"
 REPORT_JSON = "report.json"
-SUMMARY = "summary.html"
-PACKAGES = {"canvas": CANVAS_ZIP, "moodle": MOODLE_ZIP, "blackboard": BLACKBOARD_ZIP}
+PACKAGES = {lms.name: lms.feedback_zip for lms in PLUGINS}
 MAX_PAGE_BYTES = 32 << 20            # a feedback page read from disk, at most (pages are capped far below)
 INSTRUCTOR_ONLY = "for the instructor"
-MOODLE_PLUGIN = "assignsubmission_file"
-NAME_CHARS = 60                      # of a student's name in a member name (the ids decide, the name only reads)
-MOODLE_DROPPED = "&<>\"`|':\\/"   # what Moodle's clean_param(PARAM_FILE) removes from a file name
-
-
-@dataclass
-class StudentReturn:
-    """One student's files: the summary first, then the notebook pages ({file name: its path}, read
-    only when a package is written, one at a time, so a large class is never all in memory)."""
-    student: str
-    lms: dict | None
-    summary: bytes
-    pages: dict[str, Path] = field(default_factory=dict)
-    withheld: int = 0                 # notes for the instructor left off the page
-
-    def files(self) -> list[tuple[str, bytes | Path]]:
-        return [(SUMMARY, self.summary), *sorted(self.pages.items())]
 
 
 # --- the summary page -----------------------------------------------------------------------------
@@ -197,7 +109,7 @@ def _who(student: str, lms: dict | None, name: str | None = None) -> str:
     lms_ids = ""
     if lms:
         ids = lms.get("ids") or {}
-        pairs = [(k, ids.get(k)) for k in ("user_id", "participant_id", "username") if ids.get(k)]
+        pairs = [(k, ids.get(k)) for k in KEYS.values() if ids.get(k)]
         lms_ids = ", ".join(f"{TITLE.get(lms['system'], lms['system'])} {k.replace('_', ' ')} "
                           f"<bdi class=\"id\">{page_text(v, 128)}</bdi>" for k, v in pairs)
     head = f"<bdi>{page_text(name, 200)}</bdi> " if name else ""
@@ -323,11 +235,6 @@ def _summary(student: str, rep: dict, standing, total, cells: list, manual: dict
 
 
 # --- reading what grading made ----------------------------------------------------------------------
-def _safe_id(student: str) -> bool:
-    return bool(student) and student not in (".", "..") and not any(c in student for c in "/\\\0") and \
-        not any(unicodedata.category(c)[0] == "C" for c in student)
-
-
 def _read_page(path: Path) -> bytes | None:
     """A feedback page as bytes: no link followed, a regular file, at most MAX_PAGE_BYTES."""
     return read_capped(path, MAX_PAGE_BYTES)
@@ -335,7 +242,7 @@ def _read_page(path: Path) -> bytes | None:
 
 def _pages(course: Path, student: str) -> dict[str, Path]:
     """The student's feedback pages that can be sent: regular files (no link), not too large."""
-    if not _safe_id(student):
+    if not safe_id(student):
         return {}
     folder = course / "feedback" / student / ASSIGNMENT
     out = {}
@@ -392,82 +299,15 @@ def gather(course: Path, report: dict) -> list[StudentReturn]:
 
 
 # --- the packages -----------------------------------------------------------------------------------
-def _digits(text) -> bool:
-    return isinstance(text, str) and text.isascii() and text.isdigit()
-
-
-def canvas_name_part(name) -> str:
-    """The name part of a Canvas re-upload file name: word characters only, no ``_`` (the ids are
-    found as the first all-digit ``_`` parts), never empty, never all digits."""
-    text = "".join(c for c in unicodedata.normalize("NFC", str(name or "")).lower() if word_char(c) and c != "_")
-    text = text[:NAME_CHARS]           # a member name stays far below the 255 bytes a file name may hold
-    return text if text and not text.isdigit() else "student"
-
-
-def canvas_entries(r: StudentReturn) -> list[tuple[str, bytes]] | str:
-    """[(member name, bytes)] of this student in the Canvas re-upload zip, or why none."""
-    ids = (r.lms or {}).get("ids") or {}
-    uid, aid = ident(ids.get("user_id")), ident(ids.get("attachment_id"))
-    if uid is None or not _digits(uid):
-        return ("anonymous grading: Canvas's download names the student by an anonymous id, which Re-Upload "
-                "Submissions cannot match" if uid and uid.startswith("anon_") else
-                f"no Canvas user id usable by Re-Upload Submissions ({uid!r})")
-    kept = (r.lms or {}).get("attachment_ids")
-    per_nb = kept if isinstance(kept, dict) else {}
-    if aid is None or not _digits(aid):
-        aid = next((v for v in map(ident, per_nb.values()) if v and _digits(v)), None)
-    if aid is None:
-        return "no Canvas file id of their submission (Re-Upload Submissions matches a file of it)"
-    name = canvas_name_part(r.lms.get("name"))
-    out = []
-    for file, data in r.files():
-        own = ident(per_nb.get(file[:-len(".html")] + ".ipynb")) if file != SUMMARY else None
-        member = f"{name}_{uid}_{own if own and _digits(own) else aid}_{file}"
-        # the name must read back as Canvas's download naming does (lms_layouts), with these ids first
-        if not any(x["uid"] == uid and x["aid"] == member.split("_")[2] for x in canvas_splits(member, False)):
-            return f"its Canvas name {member!r} would not read back as user {uid}"
-        out.append((member, data))
-    return out
-
-
-def moodle_full_name(name) -> str:
-    """The full-name part of a Moodle feedback-zip member: ``_`` made a space (Moodle splits on it;
-    its download does the same), what ``clean_param(PARAM_FILE)`` removes (``& < > " ` | ' : \\ /``)
-    removed, control characters made spaces, no leading ``.``/``~`` (Moodle skips such files)."""
-    text = unicodedata.normalize("NFC", str(name or "")).replace("_", " ")
-    text = "".join(" " if unicodedata.category(c)[0] == "C" else "" if c in MOODLE_DROPPED else c for c in text)
-    text = " ".join(text.split()).lstrip(".~ ")[:NAME_CHARS].rstrip()
-    return text or "Participant"
-
-
-def moodle_entries(r: StudentReturn) -> list[tuple[str, bytes]] | str:
-    pid = ident(((r.lms or {}).get("ids") or {}).get("participant_id"))
-    if pid is None or not _digits(pid):
-        return f"no Moodle participant id usable by the feedback zip ({pid!r})"
-    prefix = f"{moodle_full_name(r.lms.get('name'))}_{pid}_{MOODLE_PLUGIN}_"
-    out = [(prefix + file, data) for file, data in r.files()]
-    for member, _ in out:            # read back as Moodle's download naming is read (lms_layouts)
-        m = MOODLE_FLAT.match(member)
-        if not m or m["pid"] != pid or m["file"] != member[len(prefix):]:
-            return f"its Moodle name {member!r} would not read back as participant {pid}"
-    return out
-
-
-def blackboard_entries(r: StudentReturn) -> list[tuple[str, bytes]] | str:
-    user = ident(((r.lms or {}).get("ids") or {}).get("username"))
-    if user is None or not _safe_id(user) or user.startswith((".", "~")):
-        return f"no Blackboard username usable as a file name ({user!r})"
-    return [(f"{user}_{file}", data) for file, data in r.files()]
-
-
 def generic_entries(r: StudentReturn) -> list[tuple[str, bytes]] | str:
-    if not _safe_id(r.student):
+    if not safe_id(r.student):
         return f"its student id {r.student!r} is not usable as a folder name"
     return [(f"{r.student}/{file}", data) for file, data in r.files()]
 
 
-ENTRIES = {"canvas": canvas_entries, "moodle": moodle_entries, "blackboard": blackboard_entries}
-KEYS = {"canvas": "user_id", "moodle": "participant_id", "blackboard": "username"}
+ENTRIES = {lms.name: lms.feedback_entries for lms in PLUGINS}
+KEYS = {lms.name: lms.id_key for lms in PLUGINS}
+
 
 
 def _write_zip(path: Path, entries: list[tuple[str, bytes | Path]]) -> None:
@@ -555,19 +395,20 @@ def write_feedback_return(course: Path, report: dict, log=print) -> list[Path]:
                 generic.append((r.student, g))
 
     written = []
-    for system, name in PACKAGES.items():
-        path = out_dir / name
-        if system in packages:
-            entries = [e for _, es in packages[system] for e in es]
+    for lms in PLUGINS:
+        path = out_dir / lms.feedback_zip
+        folder = out_dir / lms.feedback_folder if lms.feedback_folder else None
+        if lms.name in packages:
+            entries = [e for _, es in packages[lms.name] for e in es]
             _write_zip(path, entries)
             written.append(path)
-            if system == "blackboard":
-                _write_folder(out_dir / BLACKBOARD_DIR, entries)
-                written.append(out_dir / BLACKBOARD_DIR)
+            if folder:                          # an LMS whose files are attached by hand: a folder too
+                _write_folder(folder, entries)
+                written.append(folder)
         else:                                   # an earlier run's package for an LMS not in this download
             path.unlink(missing_ok=True)
-            if system == "blackboard" and (out_dir / BLACKBOARD_DIR).is_dir():
-                shutil.rmtree(out_dir / BLACKBOARD_DIR, ignore_errors=True)
+            if folder and folder.is_dir():
+                shutil.rmtree(folder, ignore_errors=True)
     if generic:
         _write_zip(out_dir / GENERIC_ZIP, [e for _, es in generic for e in es])
         written.append(out_dir / GENERIC_ZIP)
@@ -594,26 +435,9 @@ def _readme(students, packages, generic, left) -> str:
     out = [f"Feedback to return, assignment {ASSIGNMENT}: {n} student{'s' * (n != 1)}.",
            "Each student's files: summary.html (total, each notebook's points, hints, hand-graded comments) and "
            "one page per graded notebook. Upload only the zip of the LMS the hand-ins came from.", ""]
-    if "canvas" in packages:
-        out += [f"== {CANVAS_ZIP}: {len(packages['canvas'])} students ==",
-                "  Canvas: the assignment > Re-Upload Submissions (or the Gradebook column's menu) > choose this zip.",
-                "  Each file is named <name>_<user id>_<file id>_<page>: Canvas attaches a student's files to ONE comment",
-                "  'See attached files' on their submission (hidden while the assignment is muted). Canvas shows each",
-                "  file under the name of the student's own upload with that file id (e.g. 02_reward.ipynb); it is",
-                "  the HTML page: tell students to open it in a browser. Files Canvas cannot match are ignored: a",
-                "  student who submitted again since the download is one (download and grade again first).", ""]
-    if "moodle" in packages:
-        out += [f"== {MOODLE_ZIP}: {len(packages['moodle'])} students ==",
-                "  Moodle: Assignment settings > Feedback types > tick Feedback files; then View all submissions >",
-                "  Grading action > Upload multiple feedback files in a zip > choose this zip > Confirm. Show all",
-                "  participants (no group selected) first: Moodle imports only the participants shown. Each file",
-                "  becomes the student's feedback file and the student is notified; a file unchanged since the last",
-                "  upload is skipped.", ""]
-    if "blackboard" in packages:
-        out += [f"== {BLACKBOARD_DIR}/ ({BLACKBOARD_ZIP}): {len(packages['blackboard'])} students ==",
-                "  Blackboard Learn Original has no bulk upload of feedback files: for each student, Grade Center >",
-                "  the assignment's column > View Grade Details > Grade Attempt > Feedback to Learner > attach",
-                "  <username>_summary.html and their <username>_<notebook>.html pages.", ""]
+    for lms in PLUGINS:
+        if lms.name in packages:
+            out += lms.feedback_readme(len(packages[lms.name]))
     if generic:
         out += [f"== {GENERIC_ZIP}: {len(generic)} students ==",
                 "  One folder per student id: students whose hand-ins carried no LMS identity this package could use",
@@ -652,3 +476,4 @@ def main(argv=None) -> int:
 
 if __name__ == "__main__":
     sys.exit(main())
+
