@@ -1,6 +1,7 @@
 # The chapter's commands. Each target sets up what it needs first.
 #   make chapter  the main job: all six notebooks at the default config -> runs/chapter/
 #   make test     the test suite (runs every notebook in smoke mode, checks the release)
+#   make lint     ruff (pyproject.toml [tool.ruff]); CI runs it before make test
 #   make run      the pipeline alone, seed 0, default config -> runs/seed0/metrics.json
 #   make release  regenerate the student notebooks/ from solutions/ (nbgrader)
 #   make grade    grade a class: make grade SUBMISSIONS=lms_download.zip [SCHEDULER=tcp://host:8786] [REGRADE=1]
@@ -27,7 +28,7 @@ STAMP  := $(VENV)/.installed
 
 export PATH := $(abspath $(VENV))/bin:$(PATH)
 
-.PHONY: setup sandbox icu browser chapter run test bench meta claims pair times release grade lab clean \
+.PHONY: setup sandbox icu browser chapter run test lint bench meta claims pair times release grade lab clean \
         site site-deps site-smoke lanes colab-check gradescope
 
 setup: $(STAMP)
@@ -109,6 +110,9 @@ run: setup
 test: setup sandbox icu browser
 	$(PY) -m pytest -q
 
+lint: setup
+	$(VENV)/bin/ruff check .
+
 bench: setup
 	$(PY) benchmarks/bench.py
 
@@ -174,4 +178,4 @@ colab-check: setup
 	$(PY) scripts/colab_check.py
 
 clean:
-	rm -rf runs .pytest_cache
+	rm -rf runs .pytest_cache .ruff_cache

@@ -759,7 +759,7 @@ def _guarantees_section(held) -> str:
     off = [g for g in held if not g.held]
     rows = "".join(f'<tr><td>{page_text(g.name)}</td><td>{"held" if g.held else "<strong>NOT held</strong>"}</td>'
                    f'<td>{page_text(g.detail, 2000)}</td></tr>' for g in held)
-    return (f'<section id="guarantees"><h2>Guarantees of this run</h2><p>'
+    return ('<section id="guarantees"><h2>Guarantees of this run</h2><p>'
             + ("All of the sandbox\'s guarantees held." if not off else
                f'<strong>{len(off)} of {len(held)} did not hold</strong> ({page_text(", ".join(g.name for g in off))}): '
                f'read what a student\'s code could do there.')

@@ -155,10 +155,10 @@ def private_course(bundle: bytes, student: str, notebooks: dict, work: Path) -> 
 
 
 def _last_error(text: str) -> str:
-    lines = [l for l in text.strip().splitlines() if l.strip() and "NbGraderException" not in l]
-    for l in reversed(lines):
-        if "Error" in l or "error" in l:
-            return l.strip()[:300]
+    lines = [line for line in text.strip().splitlines() if line.strip() and "NbGraderException" not in line]
+    for line in reversed(lines):
+        if "Error" in line or "error" in line:
+            return line.strip()[:300]
     return (lines[-1] if lines else "nbgrader failed")[:300]
 
 

@@ -163,8 +163,8 @@ def _without_grader_lines(outputs: list) -> list:
     out = []
     for o in _coalesce_streams(outputs):
         if o.get("output_type") == "stream":
-            lines = [l for l in _text(o).splitlines(keepends=True)
-                     if "[graded outside this kernel]" not in l and not l.startswith("[grader] ")]
+            lines = [line for line in _text(o).splitlines(keepends=True)
+                     if "[graded outside this kernel]" not in line and not line.startswith("[grader] ")]
             if not lines:
                 continue
             o["text"] = "".join(lines)

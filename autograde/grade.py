@@ -93,7 +93,7 @@ def grade_class(submissions: Path, course: Path = COURSE_DIR, timeout: int = 120
         msg = (f"WARNING: submissions are NOT confined ({why or 'confinement switched off'}): "
                f"student code runs as you, with your files in reach. Install bubblewrap to confine it.")
         log(msg)
-        warnings.warn(msg)
+        warnings.warn(msg, stacklevel=2)
     held = guarantees.of_run(confine, why, limits, scheduler)   # which protections hold here, said first
     for line in guarantees.lines(held):
         log(line)
@@ -108,7 +108,7 @@ def grade_class(submissions: Path, course: Path = COURSE_DIR, timeout: int = 120
         log(f"skipped {line}")
     for line in got.warnings:            # e.g. look-alike ids not checked: PyICU is missing
         log(f"WARNING: {line}")
-        warnings.warn(line)
+        warnings.warn(line, stacklevel=2)
     report = {s: {"notes": list(got.notes.get(s, [])), "completion": {}, "verdicts": {}, "failed": {},
                   "lms": got.lms.get(s),          # the LMS's own identity, for its import file
                   "name": student_name(got, s),   # shown beside the id, never a key

@@ -774,20 +774,20 @@ def secret_lines(source: Path) -> list[str]:
     secret, public = set(), set()
     for path in sorted(Path(source).glob("*.ipynb")):
         for cell in nbformat.read(path, as_version=4).cells:
-            lines = [l.strip() for l in cell.get("source", "").splitlines()]
+            lines = [line.strip() for line in cell.get("source", "").splitlines()]
             m = cell.get("metadata", {}).get("nbgrader", {})
-            delimited = any(l in ("### BEGIN SOLUTION", "### BEGIN HIDDEN TESTS") for l in lines)
+            delimited = any(line in ("### BEGIN SOLUTION", "### BEGIN HIDDEN TESTS") for line in lines)
             if m.get("solution") and not delimited:
                 secret.update(lines)
                 continue
             inside = False
-            for l in lines:
-                if l in ("### BEGIN SOLUTION", "### BEGIN HIDDEN TESTS"):
+            for line in lines:
+                if line in ("### BEGIN SOLUTION", "### BEGIN HIDDEN TESTS"):
                     inside = True
-                elif l in ("### END SOLUTION", "### END HIDDEN TESTS"):
+                elif line in ("### END SOLUTION", "### END HIDDEN TESTS"):
                     inside = False
                 else:
-                    (secret if inside else public).add(l)
+                    (secret if inside else public).add(line)
     return sorted((s for s in secret - public if len(s) >= MIN_SECRET_CHARS), key=len, reverse=True)
 
 

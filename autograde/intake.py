@@ -86,7 +86,7 @@ import nbformat
 from . import lms_layouts
 from .identify import Identifier
 from .lms import plugin as lms_plugin
-from .lms_layouts import LayoutError  # noqa: F401  (the download cannot be read: grade.main says why)
+from .lms_layouts import LayoutError
 
 MB = 2 ** 20
 MAX_NOTEBOOK_BYTES = 50 * MB     # a chapter notebook with outputs is < 5 MB; 50 MB is surely wrong
@@ -369,7 +369,7 @@ def _zip_entries(zf: zipfile.ZipFile, rejected: list[str], max_members: int):
                     return _read_capped(f, cap)
             except _Refused:
                 raise
-            except Exception as e:   # bad CRC, truncated archive, unsupported compression
+            except Exception as e:  # noqa: BLE001  bad CRC, truncated archive, unsupported compression
                 raise _Refused(f"it could not be read from the zip ({type(e).__name__}: {e})") from None
         yield _Entry(name, info.file_size, when, read)
 
@@ -1072,7 +1072,7 @@ def _parse(text: str) -> nbformat.NotebookNode:
         raise ValueError(f"it says it is notebook format {version!r}; this course reads formats 1 to 4")
     try:
         return nbformat.reads(text, as_version=4)
-    except Exception as e:   # schema or conversion problems: not a notebook we can grade
+    except Exception as e:  # noqa: BLE001  schema or conversion problems: not a notebook we can grade
         raise ValueError(f"it is not a readable notebook ({type(e).__name__}: {str(e)[:120]})") from None
 
 

@@ -103,7 +103,7 @@ class ProbeServer:
         self.stop()
 
     def start(self) -> None:
-        program = [sys.executable, "-P", "-m", "pusht.grader.probe_server"]
+        argv = [sys.executable, "-P", "-m", "pusht.grader.probe_server"]
         env = {k: os.environ[k] for k in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "MKL_CBWR") if k in os.environ}
         env.setdefault("OMP_NUM_THREADS", "1")
         env.setdefault("MKL_NUM_THREADS", "1")
@@ -115,10 +115,10 @@ class ProbeServer:
             self.proc, self.init = sandbox.start_sandbox(
                 lambda fd: sandbox.bwrap_command(Path("/"), [], self.uid, limits=self.limits, env=env,
                                                  info_fd=fd, package=package),
-                program, memory=sandbox.sandbox_bytes(self.limits), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                argv, memory=sandbox.sandbox_bytes(self.limits), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                 stderr=subprocess.DEVNULL, cwd="/")
         else:        # unconfined grading (no bubblewrap): the real package, with a loud warning upstream
-            self.proc = subprocess.Popen(program, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+            self.proc = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                          stderr=subprocess.DEVNULL, env={**os.environ, **env},
                                          start_new_session=True)
         os.set_blocking(self.proc.stdin.fileno(), False)     # every write has a deadline (_send)

@@ -334,7 +334,7 @@ def program(cells, test_id: str, function: str, ours: frozenset[str] = frozenset
     inert_value = candidate - not_inert
 
     groups = _Groups()
-    for k, r in enumerate(readings):
+    for r in readings:
         if r.plain is not None:
             reads = {n.id for n in ast.walk(r.plain) if isinstance(n, ast.Name)} & inert_value
             for target in r.binds:

@@ -96,7 +96,7 @@ def build(dest: Path) -> Path:
         else:
             shutil.copyfile(path, out)
     compileall.compile_dir(str(target), quiet=1, workers=1)
-    for root, dirs, files in os.walk(dest):
+    for root, _dirs, files in os.walk(dest):
         os.chmod(root, 0o755)
         for f in files:
             os.chmod(os.path.join(root, f), 0o644)

@@ -26,15 +26,17 @@ import time
 import zipfile
 from pathlib import Path
 
+from autograde import grade, sandbox, schedule
+from autograde.course import ASSIGNMENT, COURSE_ID
+from autograde.classes.synthetic import build
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "scripts"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from autograde import grade, sandbox, schedule
-from autograde.course import ASSIGNMENT, COURSE_ID
 from bench import host_description  # noqa: E402
 from bench_grading import executed_notebooks  # noqa: E402
-from autograde.classes.synthetic import build
+
 
 KINDS = ("perfect", "colab", "wrong", "order", "badpred", "raises", "tamper", "garbage")
 

@@ -19,12 +19,12 @@ import time
 import zipfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "scripts"))
-
 import autograde.course
 from autograde import grade, sandbox, schedule
 from autograde.classes.synthetic import build
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "scripts"))
 
 
 def executed_notebooks(executed: Path | None, tmp: Path) -> Path:

@@ -23,14 +23,16 @@ import zipfile
 from datetime import datetime
 from pathlib import Path
 
+from autograde import feedback, grade, sandbox, stages, task
+from autograde.course import course_bundle
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "scripts"), str(ROOT / "benchmarks")]
 
-from autograde import feedback, grade, sandbox, stages, task
-from autograde.course import course_bundle
 from bench import host_description  # noqa: E402
 from bench_class import class_zip  # noqa: E402
 from bench_grading import command_line, executed_notebooks  # noqa: E402
+
 
 SHIM = Path(__file__).resolve().parent / "_worker_timing.py"
 

@@ -136,7 +136,6 @@ def main(argv=None) -> int:
     logs, executed = out / "logs", out / "executed"
     for d in (logs, executed):
         d.mkdir(parents=True, exist_ok=True)
-    t0 = time.perf_counter()
     seconds = {}
     for seed in args.seeds:
         for name in args.notebooks:

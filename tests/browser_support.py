@@ -66,7 +66,7 @@ def chromium(**launch):
         args = [*CHROMIUM_ARGS, *launch.pop("args", ())]
         try:
             browser = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=args, **launch)
-        except Exception as e:  # noqa: BLE001
+        except Exception as e:
             if required():
                 raise
             pytest.skip(f"{CHROMIUM} does not start under Playwright: {e}")

@@ -19,7 +19,7 @@ def reward_handin(extra_cells=(), source_padding: str = "", markdown: str = "") 
         return c["metadata"].get("nbgrader", {}).get("grade_id")
 
     src = next("".join(c["source"]) for c in sol["cells"] if gid(c) == "reward_impl")
-    src = "".join(l for l in src.splitlines(keepends=True) if l.strip() not in ("### BEGIN SOLUTION", "### END SOLUTION"))
+    src = "".join(line for line in src.splitlines(keepends=True) if line.strip() not in ("### BEGIN SOLUTION", "### END SOLUTION"))
     at = next(i for i, c in enumerate(rel["cells"]) if gid(c) == "reward_impl_tests")
     for c in rel["cells"]:
         if gid(c) == "reward_impl":

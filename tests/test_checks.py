@@ -7,14 +7,13 @@ students' functions are probed is ``tests/test_probe.py``'s.)
 """
 
 import math
-import sys
 from pathlib import Path
 
 import torch
 
-ROOT = Path(__file__).resolve().parents[1]
-
 from autograde import checks
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def verdict(test, fn):

@@ -9,17 +9,16 @@ cannot read are only noted.
 """
 
 import itertools
-import sys
 from pathlib import Path
 
 import nbformat
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-
 from autograde import cellcode
 from autograde import checks
 from autograde import delegation
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def delegations(test, cells):

@@ -10,7 +10,6 @@ implementations are absent: ``tests/test_probe.py``).
 """
 
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -18,13 +17,13 @@ import pytest
 import torch
 import torch.nn.functional as F
 
-ROOT = Path(__file__).resolve().parents[1]
-
 from autograde import checks
 from autograde import delegation
-from pusht.agent import ActorCritic  # noqa: E402
-from pusht.config import make_config  # noqa: E402
-from pusht.evaluate import policy_of  # noqa: E402
+from pusht.agent import ActorCritic
+from pusht.config import make_config
+from pusht.evaluate import policy_of
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def cell(notebook: str, grade_id: str) -> str:

@@ -38,11 +38,12 @@ from nbconvert.exporters import HTMLExporter
 from nbconvert.preprocessors import CSSHTMLHeaderPreprocessor
 from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook, new_output, new_raw_cell
 
-ROOT = Path(__file__).resolve().parents[1]
-
 from autograde import feedback_html
 from autograde.feedback_html import ALT_TEXT, CSP, CSP_META, NOTE_JAVASCRIPT, FeedbackHTMLExporter
 from browser_support import chromium
+
+ROOT = Path(__file__).resolve().parents[1]
+
 
 TRACE = "pwned"                    # what a payload that ran leaves; never written whole in a payload's code
 PNG = "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg=="

@@ -4,7 +4,6 @@ sanitised and carries a Content-Security-Policy: tests/test_feedback_browser.py 
 student's markup runs)."""
 
 import re
-import sys
 from pathlib import Path
 
 import nbformat
@@ -14,9 +13,10 @@ from nbconvert.exporters import HTMLExporter
 from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook, new_output
 from traitlets.config import Config
 
+from autograde.feedback_html import ALT_TEXT, CSP, FeedbackHTMLExporter, _edit_tags
+
 ROOT = Path(__file__).resolve().parents[1]
 
-from autograde.feedback_html import ALT_TEXT, CSP, FeedbackHTMLExporter, _edit_tags
 
 PNG = ("iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg==")
 IMG = f"data:image/png;base64,{PNG}"

@@ -70,7 +70,9 @@ def test_every_command_writes_to_the_one_course_folder_unless_told_otherwise():
         assert inspect.signature(fn).parameters["course"].default == course.COURSE_DIR, fn
     for module in (grade, lms_feedback, manual_grade):
         assert "default=COURSE_DIR" in Path(module.__file__).read_text(), module
-    make = lambda *a: subprocess.run(["make", "-n", "grade", *a], cwd=ROOT, capture_output=True, text=True).stdout
+    def make(*a):
+        return subprocess.run(["make", "-n", "grade", *a], cwd=ROOT, capture_output=True, text=True).stdout
+
     assert "--course" not in make("SUBMISSIONS=x.zip")
     assert '--course "/tmp/my course"' in make("SUBMISSIONS=x.zip", "COURSE=/tmp/my course")
     assert (ROOT / ".gitignore").read_text().splitlines().count("/course/") == 1
@@ -78,8 +80,10 @@ def test_every_command_writes_to_the_one_course_folder_unless_told_otherwise():
 
 
 def test_make_grade_passes_jobs_timeout_and_confinement_on_only_when_given():
-    make = lambda *a: " ".join(subprocess.run(["make", "-n", "grade", "SUBMISSIONS=x.zip", *a], cwd=ROOT,
-                                              capture_output=True, text=True).stdout.split())
+    def make(*a):
+        return " ".join(subprocess.run(["make", "-n", "grade", "SUBMISSIONS=x.zip", *a], cwd=ROOT,
+                                       capture_output=True, text=True).stdout.split())
+
     plain = make()
     assert "autograde.grade \"x.zip\"" in plain.replace("\\", "")
     assert not any(flag in plain for flag in ("--jobs", "--timeout", "--no-confine"))

@@ -21,10 +21,11 @@ import nbformat
 import pytest
 import yaml
 
-ROOT = Path(__file__).resolve().parents[1]
-
 from autograde import grade, gradescope, sandbox
 from autograde.course import GRADING_SOURCE, NOTEBOOKS
+
+ROOT = Path(__file__).resolve().parents[1]
+
 
 VISIBILITY = ["hidden", "after_due_date", "after_published", "visible"]
 FORMATS = ["text", "html", "simple_format", "md", "ansi"]
@@ -337,12 +338,12 @@ def _secret_lines() -> list[str]:
     for n in NOTEBOOKS:
         for cell in nbformat.read(ROOT / "solutions" / n, as_version=4).cells:
             src = cell.source.splitlines()
-            marks = [i for i, l in enumerate(src) if l.strip().startswith(("### BEGIN", "### END"))]
+            marks = [i for i, line in enumerate(src) if line.strip().startswith(("### BEGIN", "### END"))]
             if cell.metadata.get("nbgrader", {}).get("solution") and not marks:
                 lines += src
             for a, b in zip(marks[::2], marks[1::2]):
                 lines += src[a + 1:b]
-    lines = [l.strip() for l in lines if len(l.strip()) >= gradescope.MIN_SECRET_CHARS and l.strip() not in release]
+    lines = [line.strip() for line in lines if len(line.strip()) >= gradescope.MIN_SECRET_CHARS and line.strip() not in release]
     scheme = yaml.safe_load((ROOT / "autograde" / "mark_scheme.yaml").read_text())
     lines += [s.strip() for text in scheme.values() for s in text.split(". ") if len(s.strip()) >= 20]
     return lines
@@ -366,7 +367,7 @@ def _solution_and_hidden_lines() -> tuple[list[str], list[str]]:
                     inside = None
                 elif inside is not None:
                     inside.append(line)
-    keep = lambda lines: sorted({l.strip() for l in lines if len(l.strip()) >= 8 and l.strip() not in release})  # noqa: E731
+    keep = lambda lines: sorted({line.strip() for line in lines if len(line.strip()) >= 8 and line.strip() not in release})  # noqa: E731
     return keep(solution), keep(hidden)
 
 
@@ -547,7 +548,9 @@ def test_the_bundle_vendors_no_untracked_data_nor_the_course_folder(tmp_path):
     """An untracked file under a vendored path goes into the bundle only if it is Python source:
     not an output left in autograde/ by a grading run from before the course folder moved (no
     longer ignored there), nor anything of a course folder given inside the package."""
-    git = lambda *a: subprocess.run(["git", "-C", str(tmp_path), *a], check=True, capture_output=True)
+    def git(*a):
+        return subprocess.run(["git", "-C", str(tmp_path), *a], check=True, capture_output=True)
+
     git("init", "-q")
     for rel in ("course.yaml", "autograde/grade.py", "autograde/old/grades.csv", "autograde/grades.csv",
                 "autograde/new_step.py", "autograde/feedback/s1/ch3.2/02_reward.html", "pusht/nb/times.json",

@@ -6,7 +6,6 @@ This is the instructor's one command (python -m autograde.grade) on a synthetic 
 """
 
 import csv
-import sys
 import time
 import zipfile
 from pathlib import Path
@@ -14,12 +13,13 @@ from pathlib import Path
 import nbformat
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-
 from autograde import feedback, grade
 from autograde.course import ASSIGNMENT, COURSE_ID, nbgrader_api
 from autograde.manual_grade import set_manual_grade
 from autograde.classes.synthetic import write_zip
+
+ROOT = Path(__file__).resolve().parents[1]
+
 
 STUDENTS = ["badpred", "colab", "garbage", "loops", "order", "perfect", "raises", "tamper", "wrong"]
 TIMEOUT = 30   # seconds per cell: enough for every smoke-mode cell, short for the infinite loop

@@ -11,7 +11,6 @@ import csv
 import logging
 import os
 import signal
-import sys
 import threading
 import time
 import zipfile
@@ -19,11 +18,12 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-
 from autograde import feedback, grade, schedule
 from autograde.course import ASSIGNMENT, COURSE_ID
 from autograde.classes.synthetic import build
+
+ROOT = Path(__file__).resolve().parents[1]
+
 
 STUDENTS = ("perfect", "wrong", "raises")
 NOTEBOOKS = ("02_reward", "03_imagination_actor")      # "raises" hands in only 03

@@ -14,12 +14,13 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-
 from autograde import grade, sandbox
 from autograde.course import ASSIGNMENT, COURSE_ID, NOTEBOOKS
 from autograde.classes.hostile import STUDENTS, write_zip
 from autograde.classes.synthetic import build as synthetic
+
+ROOT = Path(__file__).resolve().parents[1]
+
 
 TIMEOUT = 30
 IDS = {"Ann Lee": "Ann_Lee"}          # the folder-safe form of LMS ids (intake.normalise_student_id)

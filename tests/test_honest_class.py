@@ -14,11 +14,12 @@ from pathlib import Path
 import nbformat
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-
 from autograde import answer_key, checks, grade
 from autograde.course import ASSIGNMENT, COURSE_ID
 from autograde.classes import honest as honest_class
+
+ROOT = Path(__file__).resolve().parents[1]
+
 
 TIMEOUT = 60
 # the functions whose instructor's answer is, statement for statement, the package's own

@@ -17,9 +17,10 @@ from pathlib import Path
 import nbformat
 import pytest
 
+from autograde.intake import MB, Intake, collect, decode_notebook, normalise_student_id
+
 ROOT = Path(__file__).resolve().parents[1]
 
-from autograde.intake import MB, Intake, collect, decode_notebook, normalise_student_id
 
 NOTEBOOKS = ["01_world_model.ipynb", "02_reward.ipynb", "03_imagination_actor.ipynb",
              "04_imagination_gap.ipynb", "05_horizon.ipynb"]

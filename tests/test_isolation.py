@@ -20,10 +20,11 @@ from pathlib import Path
 
 import pytest
 
+from autograde import sandbox
+from conftest import running_as
+
 ROOT = Path(__file__).resolve().parents[1]
 
-from autograde import sandbox
-from conftest import running_as  # noqa: E402
 
 ROOT_ONLY = pytest.mark.skipif(os.geteuid() != 0, reason="student uids are switched (and leased) only as root")
 BWRAP = pytest.mark.skipif(not sandbox.available()[0], reason="no bubblewrap sandbox here")

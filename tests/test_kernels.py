@@ -2,7 +2,6 @@
 real kernel, with only the wait for a killed kernel's end shortened."""
 
 import asyncio
-import sys
 from pathlib import Path
 
 from jupyter_client import AsyncKernelManager

@@ -429,7 +429,7 @@ class Learner:
         unrun = [c["index"] for c in cells if c["type"] == "code" and c["count"] is None]
         if errors or unrun:
             first = errors[0] if errors else None
-            self.fail(f"Run All stopped: " + (f"cell {first['index']} raised {first['errors'][0]['ename']}: "
+            self.fail("Run All stopped: " + (f"cell {first['index']} raised {first['errors'][0]['ename']}: "
                                               f"{first['errors'][0]['evalue']}; " if first else "")
                       + f"cells {unrun} did not run")
         return time.monotonic() - start, [c["count"] for c in cells]

@@ -318,7 +318,7 @@ def test_a_tripwire_left_to_a_human_is_on_the_sheet_and_decided_from_it(course, 
     assert [(e.student, e.grade_id, e.score) for e in out["applied"]] == [("s003", "dream_impl_tests", 3.0)]
     assert cell_score_only(course, "s003", "04_imagination_gap", "dream_impl_tests") == 3.0
     assert lines[0] == "line 3: a comment without a score is not applied (give a score to apply it)"
-    assert lines[1:] == [l for l in lines[1:] if "report.json does not exist" in l]   # no grading saved one here
+    assert lines[1:] == [line for line in lines[1:] if "report.json does not exist" in line]   # no grading saved one here
     # decided: the next sheet shows it graded, not waiting
     del report["s003"]["undecided"]
     _, rows = read_sheet_rows(write_to_grade(course, report))

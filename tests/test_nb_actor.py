@@ -5,14 +5,14 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-import numpy as np  # noqa: E402
-import torch  # noqa: E402
+import numpy as np
+import torch
 
-from pusht.agent import ActorCritic  # noqa: E402
-from pusht.imagination import actor_critic_losses, freeze, imagine, page_losses  # noqa: E402
-from pusht.nb import actor  # noqa: E402
-from pusht.reward import reward_from_obs  # noqa: E402
-from pusht.world_model import WorldModel  # noqa: E402
+from pusht.agent import ActorCritic
+from pusht.imagination import actor_critic_losses, freeze, imagine, page_losses
+from pusht.nb import actor
+from pusht.reward import reward_from_obs
+from pusht.world_model import WorldModel
 
 
 def batch_maker():

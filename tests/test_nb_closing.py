@@ -9,13 +9,13 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
 
-from pusht.env import OBS_NAMES  # noqa: E402
-from pusht.nb import closing as nb06  # noqa: E402
-from pusht.selfcheck import Question, render  # noqa: E402
+from pusht.env import OBS_NAMES
+from pusht.nb import closing as nb06
+from pusht.selfcheck import Question, render
 
 N = 30
 

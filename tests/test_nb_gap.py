@@ -6,15 +6,15 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
+import numpy as np
+import pytest
 
-from pusht.analysis import at_wall, expert_replay_error, replay_error  # noqa: E402
-from pusht.config import make_config  # noqa: E402
-from pusht.dreamer import run  # noqa: E402
-from pusht.evaluate import TOUCH_TOL, Rollout  # noqa: E402
-from pusht.nb import claims, gap  # noqa: E402
-from pusht.nb.stats import MIN_REWARD_EFFECT  # noqa: E402
+from pusht.analysis import at_wall, expert_replay_error, replay_error
+from pusht.config import make_config
+from pusht.dreamer import run
+from pusht.evaluate import TOUCH_TOL, Rollout
+from pusht.nb import claims, gap
+from pusht.nb.stats import MIN_REWARD_EFFECT
 
 
 @pytest.fixture(scope="module")

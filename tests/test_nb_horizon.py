@@ -6,12 +6,12 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
 
-from pusht.nb import horizon as nb05  # noqa: E402
-from pusht.selfcheck import Question, render  # noqa: E402
+from pusht.nb import horizon as nb05
+from pusht.selfcheck import Question, render
 
 H = [5, 15, 30]
 

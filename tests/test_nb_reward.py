@@ -10,17 +10,17 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-import torch  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+import torch
+from matplotlib.figure import Figure
 
-import pusht.nb.reward as nb02  # noqa: E402
-import pusht.nb.world_model as nb01  # noqa: E402
-from pusht.env import ANG_SCALE, POS_SCALE, shaped_reward  # noqa: E402
-from pusht.reward import reward_from_obs  # noqa: E402
-from pusht.selfcheck import Question, render  # noqa: E402
+import pusht.nb.reward as nb02
+import pusht.nb.world_model as nb01
+from pusht.env import ANG_SCALE, POS_SCALE, shaped_reward
+from pusht.reward import reward_from_obs
+from pusht.selfcheck import Question, render
 
 MEAN = torch.tensor([0.01, 0.0, 0.02, 0.0, 0.02, 0.13])
 STD = torch.tensor([0.19, 0.2, 0.11, 0.11, 0.72, 0.68])

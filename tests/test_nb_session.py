@@ -6,11 +6,11 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import pytest  # noqa: E402
+import matplotlib.pyplot as plt
+import pytest
 
-from pusht.config import make_config  # noqa: E402
-from pusht.nb import GRADING_ENV, Session, setup  # noqa: E402
+from pusht.config import make_config
+from pusht.nb import GRADING_ENV, Session, setup
 
 ROOT = Path(__file__).resolve().parents[1]
 

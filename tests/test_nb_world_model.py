@@ -8,16 +8,16 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-import torch  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+import torch
+from matplotlib.figure import Figure
 
-import pusht.nb.world_model as nb01  # noqa: E402
-from pusht.env import OBS_NAMES  # noqa: E402
-from pusht.selfcheck import Question, render  # noqa: E402
-from pusht.world_model import WorldModel  # noqa: E402
+import pusht.nb.world_model as nb01
+from pusht.env import OBS_NAMES
+from pusht.selfcheck import Question, render
+from pusht.world_model import WorldModel
 
 
 def assert_labelled(fig):

@@ -14,19 +14,19 @@ definitions run there, so that is where an attack would come from):
 import ast
 import inspect
 import json
-import sys
 import textwrap
 from pathlib import Path
 
 import nbformat
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-
 from autograde import checks
 from autograde import probe
 from autograde import sandbox
 from autograde import stripped
+
+ROOT = Path(__file__).resolve().parents[1]
+
 
 needs_bwrap = pytest.mark.skipif(not sandbox.available()[0], reason=f"no sandbox here: {sandbox.available()[1]}")
 SOLUTIONS = {t.test_id: nbformat.read(ROOT / "solutions" / f"{t.notebook}.ipynb", as_version=4) for t in checks.TESTS.values()}
@@ -169,7 +169,7 @@ def _body_lines(test) -> list[str]:
         body = body[1:]
     src = textwrap.dedent(inspect.getsource(fn)).splitlines()
     lines = [src[n.lineno - 1].strip() for n in body]
-    return [l for l in lines if len(l) >= 30 and l not in _outside_references()]
+    return [line for line in lines if len(line) >= 30 and line not in _outside_references()]
 
 
 def _outside_references() -> str:
@@ -234,7 +234,7 @@ def reward_from_obs(norm_obs, mean, std):
 
 @needs_bwrap
 def test_the_package_answers_are_nowhere_in_the_probe_process(server):
-    needles = [l for t in checks.TESTS.values() for l in _body_lines(t)]
+    needles = [line for t in checks.TESTS.values() for line in _body_lines(t)]
     assert len(needles) >= 8
     here = sum(any(n.encode() in p.read_bytes() for n in needles) for p in (ROOT / "pusht").rglob("*.py"))
     assert here >= 4                        # the search would find them where they are

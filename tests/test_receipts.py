@@ -8,16 +8,16 @@ front-end) or a cheat changes it; tests/test_honest_class.py grades really execu
 
 import copy
 import re
-import sys
 from pathlib import Path
 
 import nbformat
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-
 from autograde import cellcode
 from autograde import receipts
+
+ROOT = Path(__file__).resolve().parents[1]
+
 
 EXERCISES = {"ex1": "04_imagination_gap", "ex2": "05_horizon", "ex3": "06_closing_the_gap"}
 

@@ -7,7 +7,6 @@ kernels wrote are given, read-only, to every student's kernel (``autograde.grade
 """
 
 import shutil
-import sys
 from pathlib import Path
 
 import torch

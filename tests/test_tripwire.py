@@ -4,7 +4,6 @@ report, the LMS import files and the student's own page say so. It fires on no h
 (tests/test_honest_class.py, tests/test_honest_variants.py)."""
 
 import csv
-import json
 import zipfile
 from pathlib import Path
 

@@ -21,9 +21,10 @@ from pathlib import Path
 
 import pytest
 
+from autograde import sandbox
+
 ROOT = Path(__file__).resolve().parents[1]
 
-from autograde import sandbox
 
 pytestmark = pytest.mark.skipif(not sandbox.available()[0], reason="no bubblewrap sandbox here")
 

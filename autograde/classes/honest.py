@@ -73,7 +73,7 @@ def fill(release_nb, solutions_nb):
             continue
         region = _solution_region(answer)
         cell.source = re.sub(r"^([ \t]*)# YOUR CODE HERE\n[ \t]*raise NotImplementedError\(\)\n?",
-                             lambda m: region, source(cell), count=1, flags=re.M)
+                             lambda _, region=region: region, source(cell), count=1, flags=re.M)
     return nb
 
 
