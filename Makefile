@@ -1,6 +1,8 @@
 # The chapter's commands. Each target sets up what it needs first.
 #   make chapter  the main job: all six notebooks at the default config -> runs/chapter/
 #   make test     the test suite (runs every notebook in smoke mode, checks the release)
+#   make test-fast  the tests not marked slow, for the edit-test loop (under 3 min on 2 cores): no
+#                 notebook executed, no kernel, sandbox or browser started, no system package needed
 #   make lint     ruff (pyproject.toml [tool.ruff]); CI runs it before make test
 #   make run      the pipeline alone, seed 0, default config -> runs/seed0/metrics.json
 #   make release  regenerate the student notebooks/ from solutions/ (nbgrader)
@@ -28,7 +30,7 @@ STAMP  := $(VENV)/.installed
 
 export PATH := $(abspath $(VENV))/bin:$(PATH)
 
-.PHONY: setup sandbox icu browser chapter run test lint bench meta claims pair times release grade lab clean \
+.PHONY: setup sandbox icu browser chapter run test test-fast lint bench meta claims pair times release grade lab clean \
         site site-deps site-smoke lanes colab-check gradescope
 
 setup: $(STAMP)
@@ -109,6 +111,12 @@ run: setup
 
 test: setup sandbox icu browser
 	$(PY) -m pytest -q
+
+# The fast lane: the tests not marked `slow` (pyproject.toml says what slow means; tests/conftest.py
+# marks the tests that ask for the executed notebooks, PyICU or Chromium, and the lanes; the other
+# slow tests say so themselves). It needs only `make setup`. make test still runs every test.
+test-fast: setup
+	$(PY) -m pytest -q -m 'not slow'
 
 lint: setup
 	$(VENV)/bin/ruff check .

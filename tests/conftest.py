@@ -12,6 +12,25 @@ sys.path.insert(0, str(ROOT / "scripts"))
 NOTEBOOKS = sorted((ROOT / "solutions").glob("*.ipynb"))
 
 
+# `slow` (declared in pyproject.toml): what `make test` runs and `make test-fast` leaves out. A test is
+# marked here by what it asks for: a fixture below (its own, or one a fixture it asks for asks for),
+# or the mark `lane`. Other slow tests (a class graded in the sandbox, a model trained for long)
+# carry @pytest.mark.slow themselves.
+SLOW_FIXTURES = {
+    "executed_notebooks": "executes every chapter notebook",
+    "executed_solutions": "executes every chapter notebook",
+    "icu": "needs PyICU, built against the system's ICU (tests/test_intake.py)",
+    "browser": "needs Chromium and Playwright (tests/test_feedback_browser.py)",
+}
+
+
+@pytest.hookimpl(tryfirst=True)          # before `-m` deselects by marks
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        if item.get_closest_marker("lane") or SLOW_FIXTURES.keys() & set(getattr(item, "fixturenames", ())):
+            item.add_marker(pytest.mark.slow)
+
+
 @pytest.fixture(scope="session")
 def executed_notebooks(tmp_path_factory):
     """Run every instructor notebook headless in smoke mode, in order, sharing one OUT folder as
@@ -53,7 +72,7 @@ def pytest_report_header(config):
         from record_meta import comparison_line
 
         return comparison_line(yaml.safe_load((ROOT / "meta.yaml").read_text()))
-    except Exception as e:  # noqa: BLE001  (a broken meta.yaml fails its own tests, not the header)
+    except Exception as e:  # noqa: BLE001  a broken meta.yaml fails its own tests, not the header
         return f"reproduce: could not compare the platform with meta.yaml ({type(e).__name__}: {e})"
 
 

@@ -15,6 +15,7 @@ def _notebook(path, source):
     return path
 
 
+@pytest.mark.slow                  # each of these three executes a notebook in a kernel
 @pytest.mark.skipif(os.name != "posix", reason="Unix sockets are used on Linux and macOS only")
 def test_kernel_runs_over_private_sockets_without_the_tcp_warning(tmp_path, capfd):
     nb = _notebook(tmp_path / "tiny.ipynb", "print(SMOKE, OUT)")
@@ -27,6 +28,7 @@ def test_kernel_runs_over_private_sockets_without_the_tcp_warning(tmp_path, capf
     assert not [p for p in os.listdir(out) if "ipc" in p or p.startswith("k-")]
 
 
+@pytest.mark.slow
 def test_a_failing_cell_is_reported_by_index(tmp_path):
     import papermill as pm
 
@@ -71,6 +73,7 @@ def test_peak_memory_says_so_where_it_cannot_measure(monkeypatch):
 
 
 @needs_proc
+@pytest.mark.slow
 def test_run_notebook_measures_the_kernel_and_cleans_its_progress_bars(tmp_path):
     from chapter import run_notebook
 

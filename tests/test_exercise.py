@@ -141,6 +141,7 @@ def test_ex1_on_a_terminal_locks_runs_and_reconciles(out, env, tmp_path):
     assert (out / "metrics" / "seed0.json").exists() and (out / "metrics" / "seed1.json").exists()
 
 
+@pytest.mark.slow                  # runs exercise 2's horizon sweep
 def test_ex2_on_a_terminal_asks_again_after_a_refused_letter_and_an_empty_reason(out, env, tmp_path):
     t = Terminal(args("ex2", out), env, tmp_path)
     t.expect("From 5 to 30 steps, what happens to the gap?")

@@ -120,6 +120,7 @@ def scores(course, student):
         return {g.name: (g.auto_score, g.score) for g in gb.find_submission_notebook("02_reward", ASSIGNMENT, student).grades}
 
 
+@pytest.mark.slow      # the one grading run (`graded`: nbgrader executes the hand-ins)
 @pytest.mark.parametrize("student", ["bigout", "dies", "bigsrc"])
 def test_every_graded_notebook_has_a_page_with_its_scores(graded, student):
     course, report = graded
@@ -130,6 +131,7 @@ def test_every_graded_notebook_has_a_page_with_its_scores(graded, student):
     assert float(rows[student]["score"]) == 4.0
 
 
+@pytest.mark.slow
 def test_a_huge_output_is_cut_on_the_page_with_a_note_and_the_scores_of_the_full_run(graded):
     course, report = graded
     text = page(course, "bigout")
@@ -141,6 +143,7 @@ def test_a_huge_output_is_cut_on_the_page_with_a_note_and_the_scores_of_the_full
     assert scores(course, "bigout") == scores(course, "alice")       # what was cut was scored as it ran
 
 
+@pytest.mark.slow
 def test_no_graded_copy_gives_the_notebook_as_handed_in_with_a_note(graded):
     course, report = graded
     dies, bigsrc = page(course, "dies"), page(course, "bigsrc")

@@ -24,6 +24,8 @@ import yaml
 from autograde import grade, gradescope, sandbox
 from autograde.course import GRADING_SOURCE, NOTEBOOKS
 
+pytestmark = pytest.mark.slow          # builds the bundle (pip, nbgrader) and grades in the sandbox
+
 ROOT = Path(__file__).resolve().parents[1]
 
 

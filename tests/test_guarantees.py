@@ -143,6 +143,7 @@ def _as_nobody(cmd: list[str], hold: Path, env: dict) -> list[str]:
     return ["unshare", "--mount", "--propagation", "private", "--", "sh", "-c", " && ".join(script), "sh", *drop, *cmd]
 
 
+@pytest.mark.slow                  # a grading run, as an ordinary user
 def test_a_run_as_an_ordinary_user_prints_and_records_the_guarantees_that_were_off():
     if not sandbox.available()[0]:
         pytest.skip(f"no sandbox here ({sandbox.available()[1]}): such a run is unconfined, tested above")

@@ -23,6 +23,8 @@ import pytest
 from autograde import sandbox
 from conftest import running_as
 
+pytestmark = pytest.mark.slow          # leases uids and starts sandboxes
+
 ROOT = Path(__file__).resolve().parents[1]
 
 

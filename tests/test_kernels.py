@@ -4,10 +4,12 @@ real kernel, with only the wait for a killed kernel's end shortened."""
 import asyncio
 from pathlib import Path
 
+import pytest
 from jupyter_client import AsyncKernelManager
 
-
 from autograde.kernels import DEATH_POLL_S, GradingKernelManager
+
+pytestmark = pytest.mark.slow          # starts real kernels
 
 
 def test_a_killed_kernel_is_gone_and_cleaned_up_as_with_jupyter_clients_manager():

@@ -338,6 +338,7 @@ def test_a_linked_or_huge_page_is_not_sent(course, tmp_path, monkeypatch):
 
 
 @pytest.mark.lane
+@pytest.mark.slow                  # opens Chromium
 def test_the_summary_opens_on_a_phone_in_light_and_dark_mode(course, tmp_path):
     """Headless Chromium at a phone's width: nothing runs, nothing is fetched, nothing overflows
     sideways, the hostile note and name are text, and dark mode is dark."""

@@ -13,6 +13,8 @@ import pytest
 
 from autograde import cellcode
 
+pytestmark = pytest.mark.slow          # parses the grader's sources in threads, for long
+
 SOURCE = (Path(__file__).resolve().parents[1] / "autograde" / "recreate.py").read_text()
 
 

@@ -28,7 +28,14 @@ from autograde import stripped
 ROOT = Path(__file__).resolve().parents[1]
 
 
-needs_bwrap = pytest.mark.skipif(not sandbox.available()[0], reason=f"no sandbox here: {sandbox.available()[1]}")
+_bwrap = pytest.mark.skipif(not sandbox.available()[0], reason=f"no sandbox here: {sandbox.available()[1]}")
+
+
+def needs_bwrap(test):
+    """Runs in the probe server, in the sandbox: skipped where there is none, and `slow`."""
+    return pytest.mark.slow(_bwrap(test))
+
+
 SOLUTIONS = {t.test_id: nbformat.read(ROOT / "solutions" / f"{t.notebook}.ipynb", as_version=4) for t in checks.TESTS.values()}
 
 

@@ -66,6 +66,7 @@ def test_a_fresh_process_gives_the_same_metrics(smoke_metrics, tmp_path):
 
 
 # --- seed 0 against meta.yaml: bit-exact on the recording platform, within bands elsewhere ------
+@pytest.mark.slow                  # trains seed 0 at the default config
 def test_a_fresh_run_of_seed_0_reproduces_meta():
     here = platform_fingerprint()
     verdict = comparison_line(META, here)

@@ -30,6 +30,7 @@ def same_run(a, b) -> bool:
     return sa.keys() == sb.keys() and all(torch.equal(sa[k], sb[k]) for k in sa)
 
 
+@pytest.mark.slow                  # trains in a pool of worker processes
 def test_a_sweep_on_two_workers_gives_the_numbers_of_running_it_here(tmp_path):
     # Two world models (seeds 0 and 1) and, on seed 0's, two horizons: with an empty stage cache
     # seed 0's model is trained by one task that the two runs on it wait for.
@@ -47,6 +48,7 @@ def test_a_sweep_on_two_workers_gives_the_numbers_of_running_it_here(tmp_path):
     assert all(same_run(a, b) for a, b in zip(here, again))
 
 
+@pytest.mark.slow                  # trains in a pool of worker processes
 def test_the_longest_runs_start_first_and_this_process_is_free_meanwhile(tmp_path):
     # Notebook 05's sweep in small: the runs that dream longest start first, so that no long run is
     # left to finish alone at the end. Between start_many and results() this process trains a run of
@@ -79,7 +81,7 @@ def test_a_pool_that_breaks_as_a_world_model_is_done_is_reported_not_waited_for(
     def sweep_it():
         try:
             run_many(cfgs, cache_dir=tmp_path / "data", model_cache=tmp_path / "cache", workers=2)
-        except Exception as e:  # noqa: BLE001  (handed to the test, which says what the thread raised)
+        except Exception as e:  # noqa: BLE001  handed to the test, which says what the thread raised
             outcome.append(e)
 
     t = threading.Thread(target=sweep_it, daemon=True)
@@ -121,6 +123,7 @@ def test_smoke_configs_and_a_single_run_start_no_pool(monkeypatch, tmp_path):
     assert run_many([], workers=2) == []
 
 
+@pytest.mark.slow                  # trains in a pool of worker processes
 def test_a_run_that_fails_in_a_worker_raises_its_own_error_naming_the_run(tmp_path):
     blocker = tmp_path / "not_a_folder"
     blocker.write_text("a file where the stage cache should be\n")

@@ -79,6 +79,7 @@ def reward_from_obs(norm_obs, mean, std):
 '''
 
 
+@pytest.mark.slow                  # grades in the sandbox
 @pytest.mark.skipif(not sandbox.available()[0], reason="no sandbox here")
 def test_an_unrecreatable_function_is_flagged_everywhere_and_the_instructor_decides(tmp_path):
     from autograde import manual_grade

@@ -26,7 +26,7 @@ from autograde import sandbox
 ROOT = Path(__file__).resolve().parents[1]
 
 
-pytestmark = pytest.mark.skipif(not sandbox.available()[0], reason="no bubblewrap sandbox here")
+pytestmark = [pytest.mark.skipif(not sandbox.available()[0], reason="no bubblewrap sandbox here"), pytest.mark.slow]
 
 
 def start_factory(tmp_path, monkeypatch, uid, wall=40):
