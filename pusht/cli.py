@@ -61,7 +61,7 @@ def parse_config(argv=None, prog: str = "python -m pusht.dreamer"):
         parser.error(RERUN_MISSING)
     try:
         torch.empty(0, device=cfg.device)       # fail here, with usage, if the device is unusable
-    except Exception as e:                      # torch raises RuntimeError or AssertionError here
+    except Exception as e:  # noqa: BLE001  torch raises RuntimeError or AssertionError here
         parser.error(f"--device {cfg.device} is not usable here ({str(e).splitlines()[0]}); "
                      f"use --device cpu")
     return cfg, args

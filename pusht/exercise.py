@@ -352,7 +352,7 @@ def main(argv=None) -> int:
 
         try:
             torch.empty(0, device=args.device)     # an unusable device fails now, before any question
-        except Exception as e:                     # torch raises RuntimeError or AssertionError here
+        except Exception as e:  # noqa: BLE001  torch raises RuntimeError or AssertionError here
             parser.error(f"--device {args.device} is not usable here ({str(e).splitlines()[0]}); "
                          f"use --device cpu")
         session = start(ex, args.seed, args.smoke, args.device, args.out)

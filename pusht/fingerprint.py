@@ -68,7 +68,7 @@ def platform_fingerprint() -> dict:
     try:
         from importlib.metadata import version
         pymunk_version = version("pymunk")
-    except Exception:                                           # not installed as a distribution
+    except Exception:  # noqa: BLE001  not installed as a distribution
         pymunk_version = "unknown"
     return {"torch": str(torch.__version__), "cpu_capability": torch.backends.cpu.get_cpu_capability(),
             "machine": platform.machine(), "python": platform.python_version(),

@@ -253,7 +253,7 @@ class Sweep:
         for i in self._waiting[path]:
             try:
                 self._submit_run(i)
-            except Exception as e:          # the pool broke, or is being stopped: results() says so
+            except Exception as e:  # noqa: BLE001  the pool broke, or is being stopped: results() says so
                 with self._cond:
                     self._start_error = self._start_error or (("run", i), e)
                     self._cond.notify_all()
@@ -302,7 +302,7 @@ class Sweep:
                         kind, key = self._jobs.pop(fut)
                     try:
                         value = fut.result()
-                    except Exception as e:
+                    except Exception as e:  # noqa: BLE001  a run failed in its worker: raised again here with its name
                         self._raise(kind, key, e)
                     if kind == "run":
                         self._results[key] = value

@@ -96,7 +96,7 @@ def test_the_zip_is_laid_out_as_gradescope_asks(bundle):
                 "autograde/manual_grade.py", "autograde/dask_preload.py")
     assert not [n for n in infos if n.startswith(unneeded) or n.startswith(tuple(f"course/{u}" for u in unneeded))]
     assert not [n for n in course if "__pycache__" in n or n.endswith((".pyc", ".db")) or n.startswith("autograde/source/")]
-    assert 'packages = ["pusht", "pusht.grader", "pusht.nb", "autograde"]' in course["pyproject.toml"].decode()
+    assert 'packages = ["pusht", "pusht.grader", "pusht.nb", "autograde", "autograde.lms"]' in course["pyproject.toml"].decode()
     # torch's CPU build at requirements.txt's pin, the rest of what grading needs with requirements.txt's pins
     assert "--index-url https://download.pytorch.org/whl/cpu \"torch==2.13.0\"" in setup
     assert "torch==2.13.0" in (ROOT / "requirements.txt").read_text()

@@ -508,7 +508,7 @@ def run_probes(cases: list, fn, fresh: int, helpers: dict | None = None) -> list
             out.append(probe(case, fn, fresh, helpers))
         except Exception as e:            # noqa: BLE001  the student's function raised it
             out.append(f"{type(e).__name__}: {str(e)[:300]}")
-        except BaseException as e:        # exit, interrupt: the remaining cases are not run
+        except BaseException as e:        # noqa: BLE001  exit, interrupt: the remaining cases are not run
             out.append(f"{type(e).__name__}: {str(e)[:300]}")
             out += ["not run: an earlier case stopped the function"] * (len(cases) - len(out))
             break

@@ -373,7 +373,7 @@ def rounds_sentence(rounds: list) -> str:
         lines.append(f"Over {span} the {one} half is clearly the larger in {named(one)}, and neither half is clearly "
                      f"the larger in {named('neither')}: where one half is resolved, it is the same one.")
     short = {m["round"]: expert_short(m) for m in rounds}
-    per_e = "; ".join(f"round {m['round']}: {pm(m['expert_signal_dream_eval_horizon'], m['expert_signal_dream_se_eval_horizon'])}"  # noqa: E501
+    per_e = "; ".join(f"round {m['round']}: {pm(m['expert_signal_dream_eval_horizon'], m['expert_signal_dream_se_eval_horizon'])}"
                       f" ({short[m['round']]})" for m in rounds)
     reals = [pm(m["expert_signal_real_eval_horizon"], m["expert_signal_real_se_eval_horizon"]) for m in rounds]
     real = (f"{reals[0]} in every round (the same expert from the same starts)" if len(set(reals)) == 1

@@ -77,7 +77,7 @@ def cone_verdict(reward_fn, mean, std, pusher_xy, max_dist: float = 0.3) -> dict
     try:                               # the same poses in float64: the difference is rounding noise
         _, r64 = radial_profile(reward_fn, mean, std, pusher_xy, max_dist=max_dist, dtype=torch.float64)
         noise = float(np.nanmax(np.abs(r - r64)))
-    except Exception:                  # a function that only takes float32: float32's own resolution
+    except Exception:  # noqa: BLE001  a function that only takes float32: float32's own resolution
         noise = float(np.finfo(np.float32).eps * max(1.0, np.nanmax(np.abs(r))))
     tol = ROUNDING_MARGIN * max(noise, np.finfo(np.float32).eps)
     A = np.stack([np.ones_like(d), d], 1)                                          # (n, 2)
