@@ -101,10 +101,10 @@ $(STAMP): requirements.txt pyproject.toml
 	touch $(STAMP)
 
 chapter: setup
-	$(PY) scripts/chapter.py --out runs/chapter
+	$(PY) -m scripts.chapter --out runs/chapter
 
 times: setup
-	$(PY) scripts/chapter.py --out runs/chapter --record-times
+	$(PY) -m scripts.chapter --out runs/chapter --record-times
 
 run: setup
 	$(PY) -m pusht.dreamer --seed 0 --out runs/seed0
@@ -125,13 +125,13 @@ bench: setup
 	$(PY) benchmarks/bench.py
 
 meta: setup
-	$(PY) scripts/record_meta.py
+	$(PY) -m scripts.record_meta
 
 pair: setup
 	$(VENV)/bin/jupytext --sync solutions/*.ipynb
 
 claims: setup
-	$(PY) scripts/claims.py --record
+	$(PY) -m scripts.claims --record
 
 # The chapter site is built by Jupyter Book 1.x (Sphinx), which builds offline; Jupyter Book 2
 # fetches its theme at build time. Its pins are in requirements.txt as comments that pip does not
@@ -148,7 +148,7 @@ site: chapter site-deps
 
 # CI's site: the smoke run (seconds per notebook), built the same way.
 site-smoke: setup site-deps
-	$(PY) scripts/chapter.py --smoke --out runs/chapter-smoke
+	$(PY) -m scripts.chapter --smoke --out runs/chapter-smoke
 	$(PY) -m chapter_site --run runs/chapter-smoke --out runs/site-smoke
 
 # The slow lanes (.ci/lanes): the tests marked `lane`, with what they need installed first:
@@ -158,7 +158,7 @@ lanes: setup browser site-smoke
 	SITE_HTML=runs/site-smoke/html $(PY) -m pytest -q -m lane
 
 release: setup
-	$(PY) scripts/release.py
+	$(PY) -m scripts.release
 
 grade: setup sandbox icu
 	@test -n "$(SUBMISSIONS)" || (echo "usage: make grade SUBMISSIONS=path/to/submissions.zip" && exit 2)
@@ -183,7 +183,7 @@ lab: setup
 # snapshot of this working tree. Makes .venv-colab the first time (Python 3.13 from pyenv or PATH;
 # several GB, torch's CUDA build from PyPI), then reuses it while colab/stack.txt is unchanged.
 colab-check: setup
-	$(PY) scripts/colab_check.py
+	$(PY) -m scripts.colab_check
 
 clean:
 	rm -rf runs .pytest_cache .ruff_cache

@@ -1,6 +1,6 @@
 """The chapter's main job: execute every instructor notebook (01-06) at the default config, in order.
 
-    python scripts/chapter.py [--out runs/chapter] [--smoke]
+    python -m scripts.chapter [--out runs/chapter] [--smoke]
 
 Each notebook runs headless with papermill into ``--out`` (executed notebooks, figures under
 figures/, per-seed metrics under metrics/, and the model cache shared between notebooks). Frozen

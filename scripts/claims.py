@@ -1,6 +1,6 @@
 """``make claims``: run notebooks 03-06 on seeds 0-9 and record every claim they evaluated.
 
-    python scripts/claims.py [--seeds 0 1 2 3 4 5 6 7 8 9] [--out runs/claims] [--smoke] [--record]
+    python -m scripts.claims [--seeds 0 1 2 3 4 5 6 7 8 9] [--out runs/claims] [--smoke] [--record]
 
 Each notebook runs headless (papermill, as ``make chapter`` runs it) with ``SEED`` set, all seeds
 sharing one model cache under ``--out``; notebook 04 compares its ``SEED`` with the two seeds after
@@ -32,7 +32,7 @@ import time
 from datetime import datetime, timezone
 from pathlib import Path
 
-from chapter import ROOT, execute
+from scripts.chapter import ROOT, execute
 
 from pusht.host import cpu_model
 from pusht.nb.claims import LOG_ENV, conflicts, load_all

@@ -1,6 +1,6 @@
 """The Colab lane (`make colab-check`): run every chapter notebook the way a learner runs it in Colab.
 
-    python scripts/colab_check.py [--only 01_world_model ...] [--rebuild] [--keep]
+    python -m scripts.colab_check [--only 01_world_model ...] [--rebuild] [--keep]
 
 1. .venv-colab: Colab's Python with Colab's packages, as pinned in colab/stack.txt (one line per
    package; its header names the source). Made once and reused while that file is unchanged (the
@@ -442,7 +442,7 @@ def main(argv=None) -> int:
         os.environ["JUPYTER_PATH"] = os.pathsep.join([str(jupyter)] + [
             x for x in os.environ.get("JUPYTER_PATH", "").split(os.pathsep) if x])
 
-        from chapter import execute      # scripts/chapter.py, beside this script
+        from scripts.chapter import execute
 
         pinned_before = {n: before[n] for n in stack.pins}
         baseline = set(before) - {PACKAGE}

@@ -1,10 +1,10 @@
 """Re-measure the chapter's headline numbers and write them to meta.yaml.
 
-    python scripts/record_meta.py            # seeds 0-2 at the default config + horizon sweep
+    python -m scripts.record_meta            # seeds 0-2 at the default config + horizon sweep
                                              # + the tolerance bands (fresh process per code path)
-    python scripts/record_meta.py --tolerance-only   # re-measure only the bands, keep the rest
-    python scripts/record_meta.py --closing-only     # re-measure only notebook 06's loop and fixes
-    python scripts/record_meta.py --seeds-only       # re-measure only the seeds block (same platform)
+    python -m scripts.record_meta --tolerance-only   # re-measure only the bands, keep the rest
+    python -m scripts.record_meta --closing-only     # re-measure only notebook 06's loop and fixes
+    python -m scripts.record_meta --seeds-only       # re-measure only the seeds block (same platform)
 
 Every number in meta.yaml comes from this script's runs; the chapter page's own figures are stored
 beside ours (under ``page``) so a reader can compare, never mixed into them. The determinism test
@@ -28,15 +28,13 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "scripts"))
+from pusht.config import make_config
+from pusht.dreamer import run
+from pusht.fingerprint import FLOAT_KEYS, platform_fingerprint
+from pusht.nb.horizon import EX2_ACTOR_SEEDS
+from pusht.page import PAGE
 
-from pusht.config import make_config  # noqa: E402
-from pusht.dreamer import run  # noqa: E402
-from pusht.fingerprint import FLOAT_KEYS, platform_fingerprint  # noqa: E402
-from pusht.nb.horizon import EX2_ACTOR_SEEDS  # noqa: E402
-from pusht.page import PAGE  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 HEADLINE = ["imagined_return_per_step", "real_return_per_step", "imagination_gap",
             "imagined_final_tee_dist", "real_final_tee_dist", "spawn_tee_dist", "real_success_rate",
@@ -115,7 +113,7 @@ def _worker(seeds, threads: int = 1) -> None:
 
 
 def _child(args, mkl_cbwr=None, aten=None) -> list[str]:
-    cmd = [sys.executable, str(Path(__file__).resolve()), *args]
+    cmd = [sys.executable, "-m", "scripts.record_meta", *args]
     out = subprocess.run(cmd, env=_env(mkl_cbwr, aten), cwd=ROOT, check=True, capture_output=True,
                          text=True).stdout
     return out.strip().splitlines()
@@ -431,7 +429,7 @@ def horizon_table(sweep: dict) -> dict:
 def pages_with_results(meta: dict) -> dict[Path, str]:
     """{path: its text with the numbers rendered from ``meta``}: the README's headline and
     docs/results.md's tables."""
-    from release import splice
+    from scripts.release import splice
 
     return {README: splice(README, HEADLINE_START, HEADLINE_END, render_headline(meta)),
             RESULTS_PAGE: splice(RESULTS_PAGE, RESULTS_START, RESULTS_END, render_results(meta))}

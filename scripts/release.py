@@ -1,7 +1,7 @@
 """Generate the student release (notebooks/) from the instructor notebooks (solutions/) with nbgrader.
 
-    python scripts/release.py           # regenerate notebooks/ (and refresh the Colab install cells)
-    python scripts/release.py --check   # CI: fail if notebooks/ is stale or leaks a solution
+    python -m scripts.release           # regenerate notebooks/ (and refresh the Colab install cells)
+    python -m scripts.release --check   # CI: fail if notebooks/ is stale or leaks a solution
 
 notebooks/ is never edited by hand. The release is nbgrader's `generate_assignment` output plus one
 badge cell at the top (Open in Colab, Binder), with the address taken from course.yaml.
@@ -25,9 +25,10 @@ from pathlib import Path
 
 import nbformat
 
-ROOT = Path(__file__).resolve().parents[1]
-from autograde.course import COURSE, binder_url, colab_url, install_url, nbgrader  # noqa: E402
+from autograde.course import COURSE, binder_url, colab_url, install_url, nbgrader
 # (one way to run nbgrader, shared with the grader; the course's public addresses, one place)
+
+ROOT = Path(__file__).resolve().parents[1]
 SOLUTIONS, RELEASE = ROOT / "solutions", ROOT / "notebooks"
 MARKERS = ("### BEGIN SOLUTION", "### END SOLUTION", "### BEGIN HIDDEN TESTS", "### END HIDDEN TESTS",
            "BEGIN MARK SCHEME", "END MARK SCHEME")

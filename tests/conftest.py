@@ -1,14 +1,12 @@
 """Shared, expensive fixtures: each chapter notebook is executed once per test session."""
 
 import os
-import sys
 import time
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "scripts"))
 NOTEBOOKS = sorted((ROOT / "solutions").glob("*.ipynb"))
 
 
@@ -38,7 +36,7 @@ def executed_notebooks(tmp_path_factory):
     import os
 
     import papermill as pm
-    from chapter import execute
+    from scripts.chapter import execute
 
     if os.environ.get("PUSHT_EXECUTED_NOTEBOOKS"):      # while developing: reuse a folder of executed notebooks
         out = Path(os.environ["PUSHT_EXECUTED_NOTEBOOKS"])
@@ -69,7 +67,7 @@ def pytest_report_header(config):
     """Say, at the top of every test run, what tests/test_reproduce.py compares seed 0 against here."""
     try:
         import yaml
-        from record_meta import comparison_line
+        from scripts.record_meta import comparison_line
 
         return comparison_line(yaml.safe_load((ROOT / "meta.yaml").read_text()))
     except Exception as e:  # noqa: BLE001  a broken meta.yaml fails its own tests, not the header

@@ -4,7 +4,7 @@ import os
 
 import nbformat
 import pytest
-from chapter import execute  # scripts/ is put on sys.path by conftest.py
+from scripts.chapter import execute
 
 
 def _notebook(path, source):
@@ -48,7 +48,7 @@ def test_peak_memory_reads_the_high_water_mark_of_the_matching_child_only():
     import subprocess
     import sys
 
-    from chapter import PeakMemory
+    from scripts.chapter import PeakMemory
 
     # 200 MB written (so resident) and freed again before a pause: only the high-water mark keeps it
     code = "import time; b = b'x' * 200_000_000; del b; time.sleep(0.6)  # ALLOC_MARKER"
@@ -64,7 +64,7 @@ def test_peak_memory_reads_the_high_water_mark_of_the_matching_child_only():
 
 
 def test_peak_memory_says_so_where_it_cannot_measure(monkeypatch):
-    import chapter
+    from scripts import chapter
 
     monkeypatch.setattr(chapter, "memory_measurable", lambda: (False, "not measured: no /proc here"))
     with chapter.PeakMemory() as mem:
@@ -75,7 +75,7 @@ def test_peak_memory_says_so_where_it_cannot_measure(monkeypatch):
 @needs_proc
 @pytest.mark.slow
 def test_run_notebook_measures_the_kernel_and_cleans_its_progress_bars(tmp_path):
-    from chapter import run_notebook
+    from scripts.chapter import run_notebook
 
     src = ("import numpy as np\nfrom tqdm.auto import tqdm\n"
            "for _ in tqdm(range(3)):\n    a = np.ones(300_000_000 // 8)\n    del a\nprint('done')")
@@ -152,7 +152,7 @@ def _synthetic_executed_notebook():
 
 
 def test_progress_bars_are_stripped_and_every_other_output_kept():
-    from chapter import strip_progress_bars
+    from scripts.chapter import strip_progress_bars
 
     nb = _synthetic_executed_notebook()
     plain_before = [dict(o) for o in nb.cells[3].outputs]
@@ -172,7 +172,7 @@ def test_progress_bars_are_stripped_and_every_other_output_kept():
 
 
 def test_a_notebook_of_only_bars_loses_its_widget_state_and_stays_valid(tmp_path):
-    from chapter import clean_saved_notebook, strip_progress_bars
+    from scripts.chapter import clean_saved_notebook, strip_progress_bars
 
     nb = _synthetic_executed_notebook()
     nb.cells[1].outputs = [nb.cells[1].outputs[i] for i in (0, 3)]           # the two bars only

@@ -16,8 +16,9 @@ from pathlib import Path
 import pytest
 import yaml
 
+from scripts import colab_check as cc
+
 ROOT = Path(__file__).resolve().parents[1]
-import colab_check as cc  # noqa: E402
 
 
 # ---------------------------------------------------------------------- the stack file ----
@@ -166,7 +167,7 @@ def test_the_kernel_environment_drops_the_main_venv(monkeypatch, tmp_path):
 def test_colab_lane():
     """make colab-check: every notebook runs top to bottom on Colab's stack through its own install
     cell, and the install leaves torch and numpy (every pinned package) as Colab has them."""
-    proc = subprocess.run([sys.executable, str(ROOT / "scripts" / "colab_check.py")], cwd=ROOT,
+    proc = subprocess.run([sys.executable, "-m", "scripts.colab_check"], cwd=ROOT,
                           capture_output=True, text=True, timeout=3600)
     assert proc.returncode == 0, proc.stdout[-6000:] + proc.stderr[-3000:]
     lines = proc.stdout.splitlines()

@@ -22,8 +22,9 @@ from pathlib import Path
 import nbformat
 import pytest
 
+from scripts import release
+
 ROOT = Path(__file__).resolve().parents[1]
-import release  # noqa: E402
 
 SOLUTIONS = sorted((ROOT / "solutions").glob("*.ipynb"))
 RELEASED = sorted((ROOT / "notebooks").glob("*.ipynb"))

@@ -38,7 +38,7 @@ def test_notebook_has_one_parameters_cell_and_a_colab_only_install(path):
 
 
 def test_student_release_is_in_sync_and_leaks_nothing():
-    proc = subprocess.run([sys.executable, "scripts/release.py", "--check"], cwd=ROOT,
+    proc = subprocess.run([sys.executable, "-m", "scripts.release", "--check"], cwd=ROOT,
                           capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout + proc.stderr
 

@@ -26,12 +26,11 @@ import yaml
 from pusht.config import make_config
 from pusht.dreamer import run
 from pusht.fingerprint import FLOAT_KEYS, platform_fingerprint
+from scripts.record_meta import (COUNTS, HEADLINE, acceptance, code_path, comparison_line, out_of_band,
+                                 pages_with_results, platform_differences)
 
 ROOT = Path(__file__).resolve().parents[1]
 META = yaml.safe_load((ROOT / "meta.yaml").read_text())
-sys.path.insert(0, str(ROOT / "scripts"))
-from record_meta import (COUNTS, HEADLINE, acceptance, code_path, comparison_line, out_of_band,  # noqa: E402
-                         pages_with_results, platform_differences)
 
 
 def test_results_in_the_readme_and_docs_are_rendered_from_meta():
@@ -158,7 +157,7 @@ def test_notebook_06s_section_covers_every_seed_at_the_default_config():
     """meta.yaml's ``closing`` block (scripts/record_meta.py --closing-only): every recorded seed
     has the loop's rounds at the default loop config and one run of each fix, and its recorded
     verdicts are the ones ``closing_acceptance`` draws from those rounds."""
-    from record_meta import FIXES, closing_acceptance
+    from scripts.record_meta import FIXES, closing_acceptance
 
     c = META["closing"]
     assert set(c["loop"]) == set(META["seeds"]) and set(FIXES) <= set(c)

@@ -43,7 +43,7 @@ def site(tmp_path_factory) -> Path:
     if not Path(sys.executable).with_name("jupyter-book").exists():
         skip_or_fail("Jupyter Book is not installed (make site-deps), and SITE_HTML names no built site")
     tmp = tmp_path_factory.mktemp("site")
-    subprocess.run([sys.executable, "scripts/chapter.py", "--smoke", "--out", str(tmp / "run")], cwd=ROOT, check=True,
+    subprocess.run([sys.executable, "-m", "scripts.chapter", "--smoke", "--out", str(tmp / "run")], cwd=ROOT, check=True,
                    capture_output=True)
     subprocess.run([sys.executable, "-m", "chapter_site", "--run", str(tmp / "run"), "--out", str(tmp / "site")],
                    cwd=ROOT, check=True, capture_output=True)

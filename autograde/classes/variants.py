@@ -977,12 +977,10 @@ def main(argv=None):
         return 1 if bad else 0
     executed = args.executed
     if executed is None:
-        import sys
+        # the chapter's runner (make chapter's): run from the repository root, as every job here is
+        from scripts.chapter import execute as run_solution
 
         from .honest import NOTEBOOKS, ROOT
-
-        sys.path.insert(0, str(ROOT / "scripts"))
-        from chapter import execute as run_solution
 
         executed = work / "executed"
         executed.mkdir(exist_ok=True)
