@@ -122,7 +122,7 @@ lint: setup
 	$(VENV)/bin/ruff check .
 
 bench: setup
-	$(PY) benchmarks/bench.py
+	$(PY) -m benchmarks.bench
 
 meta: setup
 	$(PY) -m scripts.record_meta

@@ -1,6 +1,6 @@
 """Speed figures for the chapter, printed and written to benchmarks/wallclock.csv.
 
-    python benchmarks/bench.py [--repeats 3]
+    python -m benchmarks.bench [--repeats 3]
 
 * env: real-sim steps per second under uniformly random actions;
 * pipeline cold: ``python -m pusht.dreamer`` at the default config, seed 0, in a fresh process
@@ -37,7 +37,6 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 
 def env_steps_per_second(n_episodes: int = 20) -> float:

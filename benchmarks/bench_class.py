@@ -1,6 +1,6 @@
 """Grading a whole synthetic class: seconds per student, and whether sharing changed any score.
 
-    python benchmarks/bench_class.py [--students 40] [--kinds perfect,colab,...] [--executed DIR]
+    python -m benchmarks.bench_class [--students 40] [--kinds perfect,colab,...] [--executed DIR]
                                      [--jobs N] [--compare N|all] [--scheduler ADDRESS]
 
 Builds a class of ``--students`` students by cycling through the synthetic hand-ins of
@@ -30,12 +30,10 @@ from autograde import grade, sandbox, schedule
 from autograde.course import ASSIGNMENT, COURSE_ID
 from autograde.classes.synthetic import build
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "scripts"))
-sys.path.insert(0, str(ROOT / "benchmarks"))
+from benchmarks.bench import host_description
+from benchmarks.bench_grading import executed_notebooks
 
-from bench import host_description  # noqa: E402
-from bench_grading import executed_notebooks  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 
 KINDS = ("perfect", "colab", "wrong", "order", "badpred", "raises", "tamper", "garbage")

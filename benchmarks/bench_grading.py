@@ -1,6 +1,6 @@
 """How long one complete submission takes to grade, confined and not.
 
-    python benchmarks/bench_grading.py [--executed DIR] [--repeats 1]
+    python -m benchmarks.bench_grading [--executed DIR] [--repeats 1]
 
 Executes the solution notebooks in smoke mode (or reuses ``--executed``), zips them as one
 student's upload, and times ``grade.grade_class`` on it in a fresh course folder, once with the
@@ -24,13 +24,12 @@ from autograde import grade, sandbox, schedule
 from autograde.classes.synthetic import build
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "scripts"))
 
 
 def executed_notebooks(executed: Path | None, tmp: Path) -> Path:
     """``executed``, or (None) the solution notebooks executed now in smoke mode, under ``tmp``."""
     if executed is None:
-        from chapter import execute
+        from scripts.chapter import execute
 
         executed = tmp / "executed"
         executed.mkdir()

@@ -1,6 +1,6 @@
 """How much could the actor-critic update gain without autograd's per-operation cost? An upper bound.
 
-    python benchmarks/bench_handwritten.py [--repeats 300]
+    python -m benchmarks.bench_handwritten [--repeats 300]
 
 Issue 12 asks for the default pipeline at 0.7x of af06280's wall time, and the actor-critic's 400
 updates are the largest part of it (benchmarks/pipeline_wallclock.txt). Two parts of each update
@@ -26,18 +26,17 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+import torch
+import torch.nn.functional as F
+
+from benchmarks.bench import host_description
+from benchmarks.bench_ops import median_ms, setup
+from pusht.agent import ActorCritic
+from pusht.env import ACT_DIM, OBS_DIM
+from pusht.imagination import freeze, imagine, lambda_return
+from pusht.world_model import WorldModel
+
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
-
-import torch  # noqa: E402
-import torch.nn.functional as F  # noqa: E402
-
-from bench import host_description  # noqa: E402
-from bench_ops import median_ms, setup  # noqa: E402
-from pusht.agent import ActorCritic  # noqa: E402
-from pusht.env import ACT_DIM, OBS_DIM  # noqa: E402
-from pusht.imagination import freeze, imagine, lambda_return  # noqa: E402
-from pusht.world_model import WorldModel  # noqa: E402
 
 
 class HandwrittenDream(torch.autograd.Function):

@@ -1,6 +1,6 @@
 """Hand grading in one pass, timed: a class's one-sentence answers applied from to_grade.csv.
 
-    python benchmarks/bench_manual_csv.py [--students 30] [--executed DIR] [--jobs N]
+    python -m benchmarks.bench_manual_csv [--students 30] [--executed DIR] [--jobs N]
                                           [--no-feedback] [--csv benchmarks/wallclock.csv]
 
 Issue 39's target: 30 students x 3 sentences (ex1-ex3_sentence, notebooks 04-06) applied in under
@@ -36,8 +36,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
-sys.path.insert(0, str(ROOT))         # this tree's autograde, here and in the feedback processes it starts
+# The feedback processes it starts import this tree's autograde too (python -m from the root gives it
+# to this process; the editable install may point at another checkout).
 os.environ["PYTHONPATH"] = os.pathsep.join([str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])])
 
 SENTENCES = {"04_imagination_gap": "ex1_sentence", "05_horizon": "ex2_sentence", "06_closing_the_gap": "ex3_sentence"}
@@ -171,7 +171,7 @@ def main(argv=None) -> int:
             if out["feedback_errors"]:
                 print(f"  feedback errors: {out['feedback_errors']}")
         if args.csv:
-            from bench import HEADER, append_rows, git_commit, host_description  # noqa: F401
+            from benchmarks.bench import HEADER, append_rows, git_commit, host_description  # noqa: F401
             from datetime import datetime, timezone
 
             when, host, commit = datetime.now(timezone.utc).replace(microsecond=0).isoformat(), host_description(), git_commit()

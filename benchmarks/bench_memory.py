@@ -1,6 +1,6 @@
 """Peak kernel memory of each chapter notebook at the default config, against Binder's 2 GB.
 
-    python benchmarks/bench_memory.py [--out DIR] [--reuse DIR]
+    python -m benchmarks.bench_memory [--out DIR] [--reuse DIR]
 
 Runs the solution notebooks as `make chapter` does (scripts/chapter.py, default config, a
 fresh output folder, so nothing is cached and every model is trained), which measures each
@@ -24,10 +24,9 @@ import tempfile
 from importlib import metadata
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "scripts"))
+from scripts import chapter
 
-import chapter  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 RECORD = ROOT / "benchmarks" / "notebook_memory.txt"
 

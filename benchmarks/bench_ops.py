@@ -1,7 +1,7 @@
 """Is the pipeline's training bound by per-operation overhead or by arithmetic? One update of each
 of its two training loops, timed at the default batch and at a batch of one.
 
-    python benchmarks/bench_ops.py [--repeats 200]
+    python -m benchmarks.bench_ops [--repeats 200]
 
 At a batch of one the update runs exactly the same operations (the same Python, the same autograd
 graph, the same kernels launched) on almost no numbers, so its time is the per-operation overhead;
@@ -20,20 +20,19 @@ import sys
 import time
 from pathlib import Path
 
+import torch
+import torch.nn.functional as F
+
+from benchmarks.bench import host_description
+from pusht.agent import ActorCritic
+from pusht.config import make_config
+from pusht.env import ACT_DIM, OBS_DIM
+from pusht.imagination import actor_critic_losses, freeze, imagine, set_gradients
+from pusht.optim import Adam
+from pusht.reward import reward_from_obs
+from pusht.world_model import WorldModel
+
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
-
-import torch  # noqa: E402
-import torch.nn.functional as F  # noqa: E402
-
-from bench import host_description  # noqa: E402
-from pusht.agent import ActorCritic  # noqa: E402
-from pusht.config import make_config  # noqa: E402
-from pusht.env import ACT_DIM, OBS_DIM  # noqa: E402
-from pusht.imagination import actor_critic_losses, freeze, imagine, set_gradients  # noqa: E402
-from pusht.optim import Adam  # noqa: E402
-from pusht.reward import reward_from_obs  # noqa: E402
-from pusht.world_model import WorldModel  # noqa: E402
 
 
 def median_ms(fn, repeats: int, warmup: int = 20) -> float:

@@ -1,6 +1,6 @@
 """Where the default pipeline's wall-clock goes, one fresh process per repeat.
 
-    python benchmarks/bench_pipeline.py [--repeats 3] [--seed 0]
+    python -m benchmarks.bench_pipeline [--repeats 3] [--seed 0]
 
 Each repeat starts a new interpreter (cold, as ``python -m pusht.dreamer`` is) and times, in order:
 ``import torch``; the rest of ``import pusht.dreamer``; the first optimizer step (``pusht.optim.Adam``;
@@ -23,10 +23,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
+from benchmarks.bench import host_description  # CPU model and family, as wallclock.csv names hosts
 
-from bench import host_description  # noqa: E402  (CPU model and family, as wallclock.csv names hosts)
+ROOT = Path(__file__).resolve().parents[1]
 
 CHILD = r"""
 import json, sys, time

@@ -1,6 +1,6 @@
 """Where one student's grading time goes, with the batch's stages shared, as a table.
 
-    python benchmarks/bench_student.py [--executed DIR] [--repeats 3]
+    python -m benchmarks.bench_student [--executed DIR] [--repeats 3]
 
 Grades a class of SHARE_FROM correct students once (``grade.grade_class``, so the stages are shared
 as in a real batch), then grades one of them again ``--repeats`` times with ``task.grade_task``
@@ -26,12 +26,11 @@ from pathlib import Path
 from autograde import feedback, grade, sandbox, stages, task
 from autograde.course import course_bundle
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT / "scripts"), str(ROOT / "benchmarks")]
+from benchmarks.bench import host_description
+from benchmarks.bench_class import class_zip
+from benchmarks.bench_grading import command_line, executed_notebooks
 
-from bench import host_description  # noqa: E402
-from bench_class import class_zip  # noqa: E402
-from bench_grading import command_line, executed_notebooks  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 
 SHIM = Path(__file__).resolve().parent / "_worker_timing.py"

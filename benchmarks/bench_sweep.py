@@ -1,6 +1,6 @@
 """A sweep's runs one after the other in this process, against run_many's worker processes.
 
-    python benchmarks/bench_sweep.py [--horizons 5 30] [--actor-seeds 1 2] [--workers N] [--seed 0]
+    python -m benchmarks.bench_sweep [--horizons 5 30] [--actor-seeds 1 2] [--workers N] [--seed 0]
 
 The sweep is notebook 05's kind: actors of several (horizon, actor seed) pairs on one frozen world
 model of ``--seed`` at the default config. The world model is trained once first, and each mode
@@ -22,14 +22,13 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.bench import host_description
+
+from pusht.config import make_config
+from pusht.dreamer import run, world_model_stage
+from pusht.sweep import WORKER_BYTES, default_workers, run_many
+
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
-
-from bench import host_description  # noqa: E402
-
-from pusht.config import make_config  # noqa: E402
-from pusht.dreamer import run, world_model_stage  # noqa: E402
-from pusht.sweep import WORKER_BYTES, default_workers, run_many  # noqa: E402
 
 
 def same(a, b) -> bool:

@@ -1,6 +1,6 @@
 """This checkout's pipeline against an older commit's, cold, interleaved, on this machine.
 
-    python benchmarks/bench_vs.py [--old af06280] [--repeats 3] [--seed 0] [--notebooks | --sweeps]
+    python -m benchmarks.bench_vs [--old af06280] [--repeats 3] [--seed 0] [--notebooks | --sweeps]
 
 Checks the old commit out into a temporary git worktree and runs, alternately, its
 ``python -m pusht.dreamer --seed 0 --no-cache`` and this checkout's (default config, a fresh
@@ -34,10 +34,9 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
+from benchmarks.bench import host_description
 
-from bench import host_description  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def one_run(tree: Path, seed: int, out: Path) -> float:
@@ -51,8 +50,8 @@ NOTEBOOK_RUN = """
 import json, sys, time
 from pathlib import Path
 tree, out = Path(sys.argv[1]), Path(sys.argv[2])
-sys.path.insert(0, str(tree / "scripts"))
-from chapter import execute
+from scripts.chapter import execute   # the tree's: PYTHONPATH is the tree (an old tree's scripts/, with no
+                                      # __init__.py, imports as a namespace package)
 seconds = {}
 for nb in sorted((tree / "solutions").glob("0[1-5]_*.ipynb")):
     t = time.perf_counter()

@@ -1,17 +1,9 @@
 """The benchmark keeps a history: each run appends, older rows are never lost or rewritten."""
 
 import csv
-import importlib.util
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-
-
-def _bench():
-    spec = importlib.util.spec_from_file_location("bench", ROOT / "benchmarks" / "bench.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+from benchmarks import bench
 
 
 def _read(path):
@@ -20,7 +12,6 @@ def _read(path):
 
 
 def test_rows_are_appended_and_an_old_file_gains_an_empty_commit_column(tmp_path):
-    bench = _bench()
     path = tmp_path / "wallclock.csv"
     old_row = ["2026-11-22T05:28:59+00:00", "cpu", "old host", "startup", "1.523", "s", "median of 5"]
     with open(path, "w", newline="") as f:
@@ -38,7 +29,6 @@ def test_rows_are_appended_and_an_old_file_gains_an_empty_commit_column(tmp_path
 
 
 def test_a_csv_with_foreign_columns_is_refused_not_overwritten(tmp_path):
-    bench = _bench()
     path = tmp_path / "wallclock.csv"
     path.write_text("a,b\n1,2\n")
     try:
@@ -51,7 +41,7 @@ def test_a_csv_with_foreign_columns_is_refused_not_overwritten(tmp_path):
 
 
 def test_host_description_names_the_cpu_family_where_linux_tells_it():
-    desc = _bench().host_description()
+    desc = bench.host_description()
     assert "torch" in desc
     cpuinfo = Path("/proc/cpuinfo")
     if cpuinfo.exists() and "cpu family" in cpuinfo.read_text():
@@ -59,13 +49,10 @@ def test_host_description_names_the_cpu_family_where_linux_tells_it():
 
 
 def test_the_class_benchmark_hands_in_six_notebooks_per_student_faults_included(executed_notebooks, tmp_path):
-    import sys
     import zipfile
     from collections import Counter
 
-    for sub in ("autograde", "scripts", "benchmarks"):
-        sys.path.insert(0, str(ROOT / sub))
-    from bench_class import KINDS, class_zip
+    from benchmarks.bench_class import KINDS, class_zip
 
     executed, _ = executed_notebooks
     ids = class_zip(executed, len(KINDS) + 2, tmp_path / "class.zip")
@@ -81,12 +68,9 @@ def test_the_class_benchmark_hands_in_six_notebooks_per_student_faults_included(
 def test_the_handwritten_bound_compares_like_with_like(capsys):
     # bench_handwritten.py bounds what rewriting the update by hand could gain (issue 12); its figures
     # mean something only while the hand-written dream and lambda-return give autograd's gradients.
-    import sys
-
-    sys.path.insert(0, str(ROOT / "benchmarks"))
     import torch
-    from bench_handwritten import lambda_return_matrix, main
 
+    from benchmarks.bench_handwritten import lambda_return_matrix, main
     from pusht.imagination import lambda_return
 
     rewards, values = torch.randn(7, 5), torch.randn(8, 5)
