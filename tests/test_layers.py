@@ -7,10 +7,9 @@ import pusht
 from pusht.stage_cache import PACKAGE, imports
 
 MODULES = sorted(m.name for m in pkgutil.walk_packages(pusht.__path__, "pusht."))
-# The one deliberate circle: ``claims.load_all`` imports the notebooks' modules so that their
+# The one deliberate circle: ``claims.load_all`` imports the notebooks' claim modules so that their
 # @claim predicates register, and each of those imports ``claim`` from ``claims``.
-REGISTRY = {("pusht.nb.claims", m) for m in ("pusht.nb.actor", "pusht.nb.closing", "pusht.nb.gap",
-                                             "pusht.nb.horizon")}
+REGISTRY = {("pusht.nb.claims", f"pusht.nb.{m}_claims") for m in ("actor", "closing", "gap", "horizon")}
 
 
 def graph() -> dict[str, set[str]]:

@@ -132,9 +132,9 @@ def note_if_false(holds: bool, evaluate) -> str:
 
 
 def load_all() -> dict[str, Claim]:
-    """Import every notebook module that registers claims (each imports its ``<nb>_claims``
-    module, whose ``@claim`` predicates register on import), and return the registry."""
-    from . import actor, closing, gap, horizon  # noqa: F401  (importing registers their claims)
+    """Import every module that registers claims (the ``<nb>_claims`` modules of notebooks 03-06,
+    whose ``@claim`` predicates register on import), and return the registry."""
+    from . import actor_claims, closing_claims, gap_claims, horizon_claims  # noqa: F401  (importing registers)
 
     return REGISTRY
 

@@ -10,7 +10,7 @@ import math
 
 from .closing_claims import (_crossed, _size_fell, _size_rose, block_closer, block_farther, change_down,
                              change_up, gap_crossed_zero, gap_grew, gap_shrank, success_rose_claim)
-from .gap import NEAR
+from .gap_words import NEAR
 from .stats import LEVEL, MIN_REWARD_EFFECT, Test, beyond, k_for, outcome as _test_outcome
 
 

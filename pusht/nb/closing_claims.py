@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from .claims import claim
-from .gap import register_expert_control
+from .gap_claims import register_expert_control
 from .stats import THIN_MARGIN, beyond, clear_of_threshold
 
 

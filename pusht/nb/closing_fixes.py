@@ -17,7 +17,7 @@ from .closing_claims import (EXPERT_CONTROL, beats_copy_last_everywhere, drift_c
 from .closing_words import (_change_words, _halves, _order, _ratio_words, _sign_word, error_size,
                             expert_words, halves_rule, halves_words, sides, yaw_share)
 from .fmt import num, pm
-from .gap import NEAR
+from .gap_words import NEAR
 from .stats import MIN_REWARD_EFFECT, k_for
 
 

@@ -19,7 +19,7 @@ from .closing_claims import (EXPERT_CONTROL, change_down, change_up, count_beyon
                              model_better_on_policy, model_worse_somewhere, position_half_clearly_larger,
                              yaw_half_clearly_larger)
 from .fmt import mm, num, pm
-from .gap import expert_control_words
+from .gap_expert import expert_control_words
 from .stats import MIN_REWARD_EFFECT, count_rise_p, k_for
 
 
