@@ -164,7 +164,7 @@ class EnsembleWorldModel(nn.Module):
         return h[:, -1], z[:, -1]
 
     def observe(self, obs, act):
-        """The members' mean (recon_loss, dyn_loss); training goes member by member (see dreamer.py)."""
+        """The members' mean (recon_loss, dyn_loss); training goes member by member (see wm_stage.py)."""
         losses = [m.observe(obs, act) for m in self.members]
         return (torch.stack([r for r, _ in losses]).mean(), torch.stack([d for _, d in losses]).mean())
 
