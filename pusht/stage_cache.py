@@ -91,9 +91,7 @@ def key(cfg, fields, module: str, package: Path = PACKAGE) -> str:
     """The hash that names a stage: the values of ``cfg``'s ``fields`` and the source of every file
     ``module`` can run (``sources``)."""
     h = hashlib.sha256(json.dumps({n: str(getattr(cfg, n)) for n in fields}, sort_keys=True).encode())
-    for path in sources(module, package):
-        h.update(path.relative_to(package).as_posix().encode() + b"\0" + path.read_bytes())
-    return h.hexdigest()[:16]
+    return _add_sources(h, module, package).hexdigest()[:16]
 
 
 def stage_path(model_cache, kind: str, cfg, fields, module: str) -> Path | None:
@@ -107,10 +105,14 @@ def stage_path(model_cache, kind: str, cfg, fields, module: str) -> Path | None:
 
 def source_hash(module: str, package: Path = PACKAGE) -> str:
     """A short hash of the source ``module`` can run (for files named otherwise, the expert data's)."""
-    h = hashlib.sha256()
+    return _add_sources(hashlib.sha256(), module, package).hexdigest()[:12]
+
+
+def _add_sources(h, module: str, package: Path):
+    """``h`` updated with the name and bytes of every file ``module`` can run; returned."""
     for path in sources(module, package):
         h.update(path.relative_to(package).as_posix().encode() + b"\0" + path.read_bytes())
-    return h.hexdigest()[:12]
+    return h
 
 
 def cached_file(path: Path) -> Path | None:
