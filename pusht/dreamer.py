@@ -30,6 +30,7 @@ from .data import EVAL_SEED_BASE, start_seeds
 from .ensemble import EnsembleWorldModel, disagreement_metrics
 from .env import OBS_NAMES
 from .evaluate import two_world_eval
+from .metric_keys import WM_RATIO, key
 from .record import record_rerun
 from .wm_stage import WorldModelStage, world_model_stage
 from .world_model import WorldModel
@@ -117,7 +118,7 @@ def summarize(cfg: Config, ev: dict, ws: WorldModelStage, ag: AgentStage) -> dic
     for kind in ("one_step", "open_loop"):
         ratio = wm_error[f"{kind}_model"] / np.maximum(wm_error[f"{kind}_copy"], 1e-12)
         for d, name in enumerate(OBS_NAMES):
-            metrics[f"wm_{kind}_ratio_{name}"] = float(ratio[d])
+            metrics[key(WM_RATIO, kind=kind, dim=name)] = float(ratio[d])
     return round_metrics(metrics)
 
 

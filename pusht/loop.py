@@ -46,6 +46,7 @@ from .dreamer import round_metrics, run
 from .env import ACT_DIM, OBS_NAMES
 from .evaluate import Rollout, policy_of, real_rollout, two_world_eval
 from .imagination import freeze, train_in_imagination
+from .metric_keys import WM_COPY_ERR, WM_ERR, WM_RATIO, key
 from .runtime import gc_paused, labelled
 from .stage_cache import cached, stage_path
 from .wm_stage import new_world_model
@@ -158,7 +159,7 @@ def train_agent_round(wm, agent, cfg: Config, starts_obs, starts_act, mean, std,
 
 
 # --- one round's measurement ----------------------------------------------------------------------
-def _error_metrics(prefix: str, err: dict) -> dict:
+def _error_metrics(data: str, err: dict) -> dict:
     out = {}
     for kind in ("one_step", "open_loop"):
         # copy-last is exact where nothing moved (the block, under a policy that never touches it):
@@ -166,12 +167,12 @@ def _error_metrics(prefix: str, err: dict) -> dict:
         ratio = np.where(err[f"{kind}_copy"] > 1e-6, err[f"{kind}_model"] / np.maximum(err[f"{kind}_copy"], 1e-6),
                          np.nan)
         for d, name in enumerate(OBS_NAMES):
-            out[f"{prefix}_{kind}_ratio_{name}"] = float(ratio[d])
+            out[key(WM_RATIO, data=data, kind=kind, dim=name)] = float(ratio[d])
         for part, dims in (("pusher", (0, 1)), ("block", (2, 3))):
             model = float(np.sqrt(np.mean(err[f"{kind}_model"][list(dims)] ** 2)))
             copy_last = float(np.sqrt(np.mean(err[f"{kind}_copy"][list(dims)] ** 2)))
-            out[f"{prefix}_{kind}_{part}_err"] = model               # metres, RMSE over x and y
-            out[f"{prefix}_{kind}_{part}_copy_err"] = copy_last
+            out[key(WM_ERR, data=data, kind=kind, body=part)] = model               # metres, RMSE over x and y
+            out[key(WM_COPY_ERR, data=data, kind=kind, body=part)] = copy_last
     return out
 
 
@@ -188,7 +189,7 @@ def measure_round(cfg: Config, rnd: int, wm, agent, init_agent, data, T, hist: d
     k = min(20, len(hist["imag_reward"]))
     metrics = {"round": rnd, "seed": cfg.seed, "eval_episodes": cfg.eval_episodes, "eval_horizon": cfg.eval_horizon,
                "train_clips": int(n_clips), "policy_episodes": int(n_episodes),
-               **ev, **_error_metrics("wm_expert", expert), **_error_metrics("wm_policy", policy),
+               **ev, **_error_metrics("expert", expert), **_error_metrics("policy", policy),
                "real_block_toward_target": ev["spawn_tee_dist"] - ev["real_final_tee_dist"],
                "imagined_reward_first20_train": float(np.mean(hist["imag_reward"][:k])),
                "imagined_reward_last20_train": float(np.mean(hist["imag_reward"][-k:]))}

@@ -31,6 +31,8 @@ import yaml
 from pusht.config import make_config
 from pusht.dreamer import run
 from pusht.fingerprint import FLOAT_KEYS, platform_fingerprint
+from pusht.metric_keys import WM_ERR, WM_RATIO
+from pusht.metric_keys import key as metric_key
 from pusht.nb.horizon import EX2_ACTOR_SEEDS
 from pusht.page import PAGE
 
@@ -58,8 +60,8 @@ def acceptance(m: dict) -> dict:
         "imagined_reward_rose_beyond_2se":
             m["imagined_reward_last20_train"] - m["imagined_reward_first20_train"]
             > 2 * m["imagined_reward_rise_se"],
-        "wm_beats_copy_last_on_pusher": all(m[f"wm_one_step_ratio_{d}"] < 1 for d in ("agent_x", "agent_y")),
-        "wm_loses_on_a_block_dim": any(m[f"wm_one_step_ratio_{d}"] > 1 for d in
+        "wm_beats_copy_last_on_pusher": all(m[metric_key(WM_RATIO, kind="one_step", dim=d)] < 1 for d in ("agent_x", "agent_y")),
+        "wm_loses_on_a_block_dim": any(m[metric_key(WM_RATIO, kind="one_step", dim=d)] > 1 for d in
                                        ("tee_x", "tee_y", "sin(tee_yaw)", "cos(tee_yaw)")),
     }
 
@@ -215,7 +217,7 @@ def closing_acceptance(rounds: list) -> dict:
     (pusher and block): below round 0's in every later round, and below the previous round's in
     every round; and whether real success ever rose above 0 (the issue's stretch goal)."""
     parts = ("pusher", "block")
-    err = {p: [m[f"wm_policy_one_step_{p}_err"] for m in rounds] for p in parts}
+    err = {p: [m[metric_key(WM_ERR, data="policy", kind="one_step", body=p)] for m in rounds] for p in parts}
     return {"policy_data_one_step_error_below_round_0_in_every_round":
                 all(e < err[p][0] for p in parts for e in err[p][1:]),
             "policy_data_one_step_error_fell_every_round":

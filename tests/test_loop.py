@@ -132,3 +132,13 @@ def test_cli_writes_every_round(tmp_path):
     assert [m["round"] for m in rounds] == [0, 1, 2]
     assert (out / "round2.json").read_text() == json.dumps(rounds[2], indent=2, sort_keys=True) + "\n"
     assert len(json.loads((out / "timing.json").read_text())) == 3
+
+
+def test_every_key_a_loop_writes_is_built_from_a_template_or_written_whole(small_loop):
+    """Round 0 is the chapter's run (metrics.json), rounds 1+ the loop's: no key is composed out of
+    sight (pusht/metric_keys.py); a key written whole is a literal at its writer."""
+    from tests.test_metric_keys import unfindable
+
+    keys = {k for m in small_loop.rounds for k in m}
+    assert len(keys) > 250
+    assert unfindable(keys) == []

@@ -73,6 +73,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..metric_keys import GAP, WM_COPY_ERR, WM_ERR, key
 from ..selfcheck import Question
 from . import figure
 from .closing_changes import (SPAN_KEYS, _dream_key, _real_key, _series, _steps, displacement_se_bound,
@@ -140,8 +141,8 @@ def fig_rounds(rounds: list):
     fig, axes = plt.subplots(1, 3, figsize=(17, 5.2))
     ax = axes[0]
     for dx, span, color in ((-0.06, "train_horizon", "tab:cyan"), (0.06, "eval_horizon", "k")):
-        g = _series(rounds, f"imagination_gap_{span}")
-        se = _series(rounds, f"imagination_gap_se_{span}")
+        g = _series(rounds, key(GAP, span=span))
+        se = _series(rounds, key(GAP, se=True, span=span))
         ax.errorbar(x + dx, g, yerr=se, fmt="o-", color=color, capsize=4, lw=1.5,
                     label=f"over {_steps(last, span)}")
     ax.axhline(0, color="gray", lw=1, ls="--", label="dream = reality")
@@ -151,8 +152,8 @@ def fig_rounds(rounds: list):
     _legend_below(ax)
     ax = axes[1]
     for dx, part, color in ((-0.06, "position", "tab:blue"), (0.06, "yaw", "tab:red")):
-        g = _series(rounds, f"imagination_gap_{part}_eval_horizon")
-        se = _series(rounds, f"imagination_gap_se_{part}_eval_horizon")
+        g = _series(rounds, key(GAP, part=part, span="eval_horizon"))
+        se = _series(rounds, key(GAP, se=True, part=part, span="eval_horizon"))
         ax.errorbar(x + dx, g, yerr=se, fmt="o-", color=color, capsize=4, lw=1.5,
                     label=f"{part} half" + (" (the block's angle)" if part == "yaw" else " (its distance)"))
     ax.axhline(0, color="gray", lw=1, ls="--")
@@ -192,8 +193,8 @@ def fig_model_error(rounds: list):
             ax = axes[i, j]
             vals = []
             for data in ("policy", "expert"):
-                model = _series(rounds, f"wm_{data}_{kind}_{part}_err")
-                copy_ = _series(rounds, f"wm_{data}_{kind}_{part}_copy_err")
+                model = _series(rounds, key(WM_ERR, data=data, kind=kind, body=part))
+                copy_ = _series(rounds, key(WM_COPY_ERR, data=data, kind=kind, body=part))
                 vals += model + copy_
                 ax.plot(x, model, "o-", color=DATA_COLORS[data], lw=2, label=f"world model, {DATA_LABELS[data]}")
                 ax.plot(x, copy_, "o--", color=DATA_COLORS[data], lw=1.2, alpha=0.7,
@@ -266,8 +267,8 @@ def fig_fixes(state_m: dict, loop_last_m: dict, delta_m: dict, ens_m: dict, labe
     x = np.arange(len(runs), dtype=float)
     fig, axes = plt.subplots(1, 4, figsize=(21, 5.4))
     for ax, span in zip(axes[:2], SPAN_KEYS):
-        g = [m[f"imagination_gap_{span}"] for m in runs]
-        se = [m[f"imagination_gap_se_{span}"] for m in runs]
+        g = [m[key(GAP, span=span)] for m in runs]
+        se = [m[key(GAP, se=True, span=span)] for m in runs]
         ax.bar(x, g, 0.6, yerr=se, capsize=5, color=colors, alpha=0.85)
         ax.axhline(0, color="k", lw=0.8)
         ax.set_xticks(x, labels, fontsize=8)
@@ -276,8 +277,8 @@ def fig_fixes(state_m: dict, loop_last_m: dict, delta_m: dict, ens_m: dict, labe
         ax.set_title(f"The gap over {_steps(state_m, span)}")
     ax = axes[2]
     for dx, part, color in ((-0.18, "position", "tab:blue"), (0.18, "yaw", "tab:red")):
-        g = [m[f"imagination_gap_{part}_eval_horizon"] for m in runs]
-        se = [m[f"imagination_gap_se_{part}_eval_horizon"] for m in runs]
+        g = [m[key(GAP, part=part, span="eval_horizon")] for m in runs]
+        se = [m[key(GAP, se=True, part=part, span="eval_horizon")] for m in runs]
         ax.bar(x + dx, g, 0.36, yerr=se, capsize=4, color=color, alpha=0.8,
                label=f"{part} half" + (" (the block's angle)" if part == "yaw" else " (its distance)"))
     ax.axhline(0, color="k", lw=0.8)
@@ -287,8 +288,8 @@ def fig_fixes(state_m: dict, loop_last_m: dict, delta_m: dict, ens_m: dict, labe
     ax.set_title(f"The gap's two halves ({_steps(state_m, 'eval_horizon')})")
     _legend_below(ax, y=-0.3)
     ax = axes[3]
-    for dx, world, key in ((-0.18, "dream", _dream_key("eval_horizon")), (0.18, "real", _real_key("eval_horizon"))):
-        ax.bar(x + dx, [m[key] for m in runs], 0.36, color=WORLD_COLORS[world], alpha=0.85,
+    for dx, world, name in ((-0.18, "dream", _dream_key("eval_horizon")), (0.18, "real", _real_key("eval_horizon"))):
+        ax.bar(x + dx, [m[name] for m in runs], 0.36, color=WORLD_COLORS[world], alpha=0.85,
                label="in the dream" if world == "dream" else "in reality")
     ax.axhline(0, color="k", lw=0.8)
     ax.set_xticks(x, [f"{lab}\n{successes(m)}/{m['eval_episodes']} solved" for lab, m in zip(labels, runs)],

@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 import math
 
+from ..metric_keys import GAP, RETURN, WM_RATIO, key
 from .closing_claims import (_crossed, _size_fell, _size_rose, block_closer, block_farther, change_down,
                              change_up, gap_crossed_zero, gap_grew, gap_shrank, success_rose_claim)
 from .gap_words import NEAR
@@ -101,8 +102,7 @@ def metric_change(a: dict, b: dict, key: str, se_key: str, level: float = LEVEL,
 def _gap_keys(span: str, part: str | None = None) -> tuple[str, str]:
     if span not in SPAN_KEYS:
         raise ValueError(f"span must be one of {SPAN_KEYS}, got {span!r}")
-    tag = f"_{part}" if part else ""
-    return f"imagination_gap{tag}_{span}", f"imagination_gap_se{tag}_{span}"
+    return key(GAP, part=part, span=span), key(GAP, se=True, part=part, span=span)
 
 
 def gap_change(rounds: list, span: str = "eval_horizon", level: float = LEVEL) -> Change:
@@ -146,11 +146,11 @@ def _short(m: dict, span: str) -> str:
 
 
 def _dream_key(span: str) -> str:
-    return f"trained_dream_return_per_step_{span}"
+    return key(RETURN, policy="trained", world="dream", span=span)
 
 
 def _real_key(span: str) -> str:
-    return f"trained_real_return_per_step_{span}"
+    return key(RETURN, policy="trained", world="real", span=span)
 
 
 def _series(rounds, key) -> list[float]:
@@ -192,7 +192,7 @@ def toward_outcome(m: dict) -> str:
 def expert_ratio(m: dict, kind: str, dim: str) -> float:
     """The model's error over copy-last's on held-out expert data, ``kind`` "one_step" or
     "open_loop", for one observation dimension (``metrics.json`` or a loop round)."""
-    for key in (f"wm_{kind}_ratio_{dim}", f"wm_expert_{kind}_ratio_{dim}"):
-        if key in m:
-            return float(m[key])
+    for name in (key(WM_RATIO, kind=kind, dim=dim), key(WM_RATIO, data="expert", kind=kind, dim=dim)):
+        if name in m:
+            return float(m[name])
     raise KeyError(f"no {kind} copy-last ratio for {dim} in these metrics")

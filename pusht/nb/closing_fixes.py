@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from ..metric_keys import GAP, key
 from ..env import ARENA_HALF, CONTROL_DT, OBS_NAMES, SUCCESS_POS
 from .closing_changes import SPAN_KEYS, _real_key, _short, _steps, expert_ratio, fix_change, successes
 from .closing_claims import (EXPERT_CONTROL, beats_copy_last_everywhere, drift_crossed_zero,
@@ -107,8 +108,8 @@ def delta_sentence(state_m: dict, delta_m: dict) -> str:
           "copy-last's error). ")
     words = {}
     for span in SPAN_KEYS:
-        g, se = delta_m[f"imagination_gap_{span}"], delta_m[f"imagination_gap_se_{span}"]
-        gs = state_m[f"imagination_gap_{span}"]
+        g, se = delta_m[key(GAP, span=span)], delta_m[key(GAP, se=True, span=span)]
+        gs = state_m[key(GAP, span=span)]
         words[span] = _sign_word(g, se, k)
         s += (f"Over {_steps(delta_m, span)} its gap is {pm(g, se)} ({words[span]}; the state model "
               f"{gs:+.3f}). ")
@@ -173,8 +174,8 @@ def ensemble_sentence(single_m: dict, ens_m: dict, penalty: float | None = None,
         word = {"up": "higher than the single model's, beyond the noise and the minimum effect",
                 "down": "lower than the single model's, beyond the noise and the minimum effect",
                 "same": "not told apart from the single model's"}[c.direction()]
-        s += (f"Over {_steps(ens_m, span)} the ensemble's gap is {pm(c.last, ens_m[f'imagination_gap_se_{span}'])} "
-              f"against the single model's {pm(c.first, single_m[f'imagination_gap_se_{span}'])}: "
+        s += (f"Over {_steps(ens_m, span)} the ensemble's gap is {pm(c.last, ens_m[key(GAP, se=True, span=span)])} "
+              f"against the single model's {pm(c.first, single_m[key(GAP, se=True, span=span)])}: "
               f"{c.diff:+.3f}, {word} ({_ratio_words(c)}; minimum effect {c.min_effect:.2f}). ")
     s += f"Over the whole evaluation its gap is {halves_words(ens_m)}. {halves_rule(n, short=True)} "
     sd = sides(single_m, ens_m)

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from ..metric_keys import ERROR_SIZE, EXPERT_SIGNAL, RETURN, WM_COPY_ERR, WM_ERR, YAW_MINUS_POSITION, ZERO_BLOCK_MOVED, key
 from ..env import SUCCESS_POS
 from .closing_changes import (COUNT_P, Change, ERR_RES, _arrow, _dream_key, _gap_keys, _outcome, _real_key,
                               _series, _short, _steps, compare, displacement_se_bound, fix_change,
@@ -48,9 +49,9 @@ def sides(a: dict, b: dict, span: str = "eval_horizon") -> dict:
     bar and ``moved``, a dict ``{"dream": "up"|"down"|"same", "real": ...}``."""
     c = fix_change(a, b, span)
     out = {"gap": c.diff, "min_effect": c.min_effect, "moved": {}, "bar": {}}
-    for world, key in (("dream", _dream_key(span)), ("real", _real_key(span))):
-        se_key = key.replace("_return_per_step_", "_return_per_step_se_")
-        d = float(b[key] - a[key])
+    for world in ("dream", "real"):
+        name, se_key = (key(RETURN, policy="trained", world=world, se=se, span=span) for se in (False, True))
+        d = float(b[name] - a[name])
         se = math.hypot(a[se_key], b[se_key])
         kw = dict(diff=d, se=se, k=c.k, min_effect=c.min_effect, quantity=f"{world} rating")
         out[world] = d
@@ -110,7 +111,7 @@ def halves_order(position: float, yaw: float, diff_se: float, n_starts: int) -> 
 def _diff_se(m: dict, span: str = "eval_horizon", what: str = "imagination_gap") -> float:
     """The standard error over the starts of |yaw half| - |position half| of the gap (or, with
     ``what="gap_drift"``, of the drift)."""
-    return m[f"{what}_yaw_minus_position_se_{span}"]
+    return m[key(YAW_MINUS_POSITION, error=what, se=True, span=span)]
 
 
 def _order(m: dict, span: str = "eval_horizon") -> str:
@@ -123,7 +124,7 @@ def error_size(m: dict, span: str = "eval_horizon", what: str = "imagination_gap
     gap near zero can hide when the halves cancel; ``what="gap_drift"``: of the drift), and its
     standard error over the starts (``split.size_split``). Where the halves share a sign the size
     is the gap's size and its standard error the gap's: one quantity, one test."""
-    return m[f"{what}_size_{span}"], m[f"{what}_size_se_{span}"]
+    return m[key(ERROR_SIZE, error=what, span=span)], m[key(ERROR_SIZE, error=what, se=True, span=span)]
 
 
 def size_change(a: dict, b: dict, span: str = "eval_horizon", what: str = "imagination_gap") -> Change:
@@ -182,8 +183,8 @@ def expert_words(m: dict, span: str = "eval_horizon") -> tuple[str, str]:
     the expert's own gap, dream minus reality, beside it."""
     n = int(m["eval_episodes"])
     k = k_for(n)
-    d, dse = m[f"expert_signal_dream_{span}"], m[f"expert_signal_dream_se_{span}"]
-    r, rse = m[f"expert_signal_real_{span}"], m[f"expert_signal_real_se_{span}"]
+    d, dse = m[key(EXPERT_SIGNAL, world="dream", span=span)], m[key(EXPERT_SIGNAL, world="dream", se=True, span=span)]
+    r, rse = m[key(EXPERT_SIGNAL, world="real", span=span)], m[key(EXPERT_SIGNAL, world="real", se=True, span=span)]
     nums = f"expert minus zero actions: dream {pm(d, dse)}, reality {pm(r, rse)} per step"
     kw = dict(signal=d, se=dse, k=k, min_effect=MIN_REWARD_EFFECT)
     rewards, penalises = dream_rewards_expert(**kw), dream_penalises_expert(**kw)
@@ -204,10 +205,11 @@ def expert_words(m: dict, span: str = "eval_horizon") -> tuple[str, str]:
 def expert_short(m: dict, span: str = "eval_horizon") -> str:
     """A round's expert control in a few words (the same claims as :func:`expert_words`)."""
     k = k_for(int(m["eval_episodes"]))
-    kw = dict(signal=m[f"expert_signal_dream_{span}"], se=m[f"expert_signal_dream_se_{span}"], k=k,
+    kw = dict(signal=m[key(EXPERT_SIGNAL, world="dream", span=span)],
+              se=m[key(EXPERT_SIGNAL, world="dream", se=True, span=span)], k=k,
               min_effect=MIN_REWARD_EFFECT)
     rewards, penalises = dream_rewards_expert(**kw), dream_penalises_expert(**kw)
-    moved = m[f"zero_dream_block_moved_{span}"]
+    moved = m[key(ZERO_BLOCK_MOVED, span=span)]
     if not EXPERT_CONTROL["valid"](moved=moved, tol=SUCCESS_POS):
         return f"control invalid: the zero-action dream moves the untouched block {moved * 100:.0f} cm"
     return ("pays them more than standing still" if rewards else "pays them less than standing still" if penalises
@@ -303,8 +305,8 @@ def rounds_table(rounds: list) -> str:
     rows = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
 
     def err(m, kind, part):
-        return (f"{1000 * m[f'wm_policy_{kind}_{part}_err']:.1f} / "
-                f"{1000 * m[f'wm_policy_{kind}_{part}_copy_err']:.1f}")
+        at = dict(data="policy", kind=kind, body=part)
+        return f"{1000 * m[key(WM_ERR, **at)]:.1f} / {1000 * m[key(WM_COPY_ERR, **at)]:.1f}"
 
     for m in rounds:
         n = m["eval_episodes"]
@@ -450,7 +452,7 @@ def model_error_sentence(rounds: list) -> str:
     for data in ("policy", "expert"):
         parts = []
         for part in ("block", "pusher"):
-            v = _series(rounds, f"wm_{data}_one_step_{part}_err")
+            v = _series(rounds, key(WM_ERR, data=data, kind="one_step", body=part))
             parts.append(f"the {part}'s {_arrow(v)} ({trend_phrase(v, idx)})")
         where = ("On the policy's data (clips of each round's own real evaluation rollouts, never trained on)"
                  if data == "policy" else "On held-out expert data")
@@ -459,7 +461,8 @@ def model_error_sentence(rounds: list) -> str:
             last = rounds[-1]
             rel = []
             for part in ("block", "pusher"):
-                model, copy_ = last[f"wm_policy_one_step_{part}_err"], last[f"wm_policy_one_step_{part}_copy_err"]
+                model = last[key(WM_ERR, data="policy", kind="one_step", body=part)]
+                copy_ = last[key(WM_COPY_ERR, data="policy", kind="one_step", body=part)]
                 if model > copy_ + ERR_RES:
                     rel.append(f"the {part}'s is still {model / copy_:.1f}x copy-last's ({mm(model)} vs {mm(copy_)})"
                                if copy_ > 0 else f"the {part}'s is {mm(model)}, copy-last's 0")
@@ -474,7 +477,7 @@ def model_error_sentence(rounds: list) -> str:
     ol = []
     for data in ("policy", "expert"):
         for part in ("block", "pusher"):
-            v = _series(rounds, f"wm_{data}_open_loop_{part}_err")
+            v = _series(rounds, key(WM_ERR, data=data, kind="open_loop", body=part))
             d = _outcome(v[-1] - v[0], ERR_RES)
             verb = {"down": "fell overall", "up": "rose overall", "same": "within 1 mm overall"}[d]
             ol.append(f"{DATA_LABELS[data]}, {part}: {_arrow(v)} ({verb}; {trend_phrase(v, idx)})")
@@ -484,8 +487,8 @@ def model_error_sentence(rounds: list) -> str:
     def ends(key):
         return [rounds[0][key], rounds[-1][key]]
 
-    pol = [ends(f"wm_policy_{k}_{p}_err") for k in ("one_step", "open_loop") for p in ("block", "pusher")]
-    exp = [ends(f"wm_expert_{k}_{p}_err") for k in ("one_step", "open_loop") for p in ("block", "pusher")]
+    pol = [ends(key(WM_ERR, data="policy", kind=k, body=p)) for k in ("one_step", "open_loop") for p in ("block", "pusher")]
+    exp = [ends(key(WM_ERR, data="expert", kind=k, body=p)) for k in ("one_step", "open_loop") for p in ("block", "pusher")]
     share = ""
     if "train_clips" in rounds[0] and rounds[-1]["train_clips"] > 0:
         share = (f" (after round {R}, {1 - rounds[0]['train_clips'] / rounds[-1]['train_clips']:.0%} of its "

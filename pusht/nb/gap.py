@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..metric_keys import EXPERT_SIGNAL, GAP, GAP_TERM, RETURN, ZERO_BLOCK_MOVED, key
+from ..split import PARTS
 from ..env import SUCCESS_ANG, SUCCESS_POS, obs_to_pose
 from ..selfcheck import Question
 from . import figure
@@ -123,21 +125,21 @@ def fig_decomposition(m: dict, steps: dict, n: int | None = None):
     kk = _k(m, n)
     for ax, span in zip(axes[:2], SPANS):
         for dx, world in ((-0.2, "dream"), (0.2, "real")):
-            ax.bar(x + dx, [m[f"{p}_{world}_return_per_step_{span}"] for p in POLICY_LABELS], 0.4,
+            ax.bar(x + dx, [m[key(RETURN, policy=p, world=world, span=span)] for p in POLICY_LABELS], 0.4,
                    color=COLORS[world], alpha=0.85, label="in the dream" if world == "dream" else "in reality")
         ax.set_xticks(x, list(POLICY_LABELS.values()))
         ax.axhline(0, color="k", lw=0.8)
         ax.set_ylabel("mean reward per step")
         ax.set_title(f"First {steps[span]} steps ({SPANS[span]})")
-    lo = min(m[f"{p}_{w}_return_per_step_{s}"] for p in POLICY_LABELS for w in ("dream", "real") for s in SPANS)
+    lo = min(m[key(RETURN, policy=p, world=w, span=s)] for p in POLICY_LABELS for w in ("dream", "real") for s in SPANS)
     for ax in axes[:2]:
         ax.set_ylim(1.3 * lo, 0)
     ax = axes[2]
     width = 0.18
     for j, span in enumerate(SPANS):
-        keys = ["imagination_gap", *(f"gap_{t}" for t in TERMS)]
-        vals = [m[f"{k}_{span}"] for k in keys]
-        errs = [kk * m[f"{k}_se_{span}"] for k in keys]
+        keys = [(GAP, {}), *((GAP_TERM, {"term": t}) for t in TERMS)]
+        vals = [m[key(t, span=span, **p)] for t, p in keys]
+        errs = [kk * m[key(t, se=True, span=span, **p)] for t, p in keys]
         ax.bar(np.arange(4) + (j - 0.5) * 2 * width, vals, 2 * width, yerr=errs, capsize=3,
                color=("tab:cyan", "tab:blue")[j], label=f"first {steps[span]} steps ({SPANS[span]})")
     ax.set_xticks(np.arange(4), ["gap", *(v.replace(" (", "\n(").replace("actor's ", "actor's\n")
@@ -169,10 +171,10 @@ def fig_block_over_time(rollouts: dict, H: int, clip: int, data_mean_dist: float
               for p, ls in zip(POLICY_LABELS, [":", "-.", "-"])]
     curves += [("real_zero", ":", COLORS["real"], "reality, zero actions"),
                ("real_trained", "-", COLORS["real"], "reality, trained actor")]
-    for key, ls, color, label in curves:
-        if key in rollouts:
-            ax.plot(t, dist(rollouts[key]), ls=ls, color=color, label=label)
-            ay.plot(t, yaw(rollouts[key]), ls=ls, color=color)
+    for name, ls, color, label in curves:
+        if name in rollouts:
+            ax.plot(t, dist(rollouts[name]), ls=ls, color=color, label=label)
+            ay.plot(t, yaw(rollouts[name]), ls=ls, color=color)
     for a in (ax, ay):
         a.axvline(H * dt, color="k", ls="--", lw=1, label=f"the actor's training horizon ({H} steps)" if a is ax else None)
         a.axvline(clip * dt, color="tab:gray", ls=":", lw=1.2,
@@ -205,15 +207,16 @@ def fig_expert_control(m: dict, steps: dict, n: int | None = None):
     kk = _k(m, n)
     for ax, span in zip(axes, SPANS):
         for dx, world in ((-0.2, "dream"), (0.2, "real")):
-            keys = [f"expert_signal{tag}_{world}" for tag in ("", "_position", "_yaw")]
-            ax.bar(x + dx, [m[f"{k}_{span}"] for k in keys], 0.4,
-                   yerr=[kk * m[f"{k}_se_{span}"] for k in keys], capsize=3, color=COLORS[world], alpha=0.85,
+            signal = [key(EXPERT_SIGNAL, part=p, world=world, span=span) for p in PARTS]
+            noise = [key(EXPERT_SIGNAL, part=p, world=world, se=True, span=span) for p in PARTS]
+            ax.bar(x + dx, [m[k] for k in signal], 0.4,
+                   yerr=[kk * m[k] for k in noise], capsize=3, color=COLORS[world], alpha=0.85,
                    label="in the dream (the expert's actions replayed)" if world == "dream" else "in reality")
         ax.axhspan(-MIN_REWARD_EFFECT, MIN_REWARD_EFFECT, color="0.85", zorder=0,
                    label=f"smaller than the minimum effect (±{MIN_REWARD_EFFECT:.2f})")
         ax.axhline(0, color="k", lw=0.8)
         ax.set_xticks(x, ["whole reward", "position term", "yaw term"])
-        moved = m.get(f"zero_dream_block_moved_{span}")
+        moved = m.get(key(ZERO_BLOCK_MOVED, span=span))
         invalid = moved is not None and moved > SUCCESS_POS
         ax.set_title(f"First {steps[span]} steps ({SPANS[span]})"
                      + (f"\ncontrol INVALID: the zero-action dream moves the untouched block {moved * 100:.0f} cm"
@@ -245,13 +248,13 @@ def fig_distribution_shift(real_roll, dream_roll, at_wall_real: np.ndarray, expe
     ax.set_ylabel("share of steps with the pusher against a wall")
     ax.set_title("Where the pusher spends its time")
     ax = axes[1]
-    for key, color in (("pusher", "tab:blue"), ("block", "tab:red")):
-        e = replay[key]
+    for body, color in (("pusher", "tab:blue"), ("block", "tab:red")):
+        e = replay[body]
         t = (np.arange(len(e)) + 1) * dt
-        ax.plot(t, e.mean(1), color=color, lw=2, label=f"{key}, replaying the policy's real actions")
-        ex = expert_replay[key]
+        ax.plot(t, e.mean(1), color=color, lw=2, label=f"{body}, replaying the policy's real actions")
+        ex = expert_replay[body]
         ax.plot((np.arange(len(ex)) + 1) * dt, ex.mean(1), color=color, ls="--", lw=1.5,
-                label=f"{key}, replaying held-out expert clips")
+                label=f"{body}, replaying held-out expert clips")
     ax.axvline(clip * dt, color="tab:gray", ls=":", lw=1.2, label=f"length of the training clips ({clip} steps)")
     ax.set_xlabel("time since the start frame (s)")
     ax.set_ylabel("distance between dreamed and true position\n(m, mean over the starts)")

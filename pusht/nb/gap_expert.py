@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..metric_keys import EXPERT_GAP, EXPERT_SIGNAL, GAP_TERM, ZERO_BLOCK_MOVED, key
 from ..env import SUCCESS_POS
 from .fmt import apart
 from .gap_claims import (EXPERT_CONTROL, dream_ends_collapse, dream_pays_expert, dream_penalises_expert,
@@ -31,9 +32,9 @@ def expert_control_words(m: dict, span: str, k: float, claims: dict = EXPERT_CON
     expert's own gap is the drift (what the dream overpays standing still) plus the dream's expert signal
     minus reality's; where those two parts cancel, a gap near zero is said to be a cancellation."""
     where = SPAN_WORDS[span](m)
-    moved = m[f"zero_dream_block_moved_{span}"]
+    moved = m[key(ZERO_BLOCK_MOVED, span=span)]
     ok = claims["valid"](moved=moved, tol=SUCCESS_POS)
-    g, gse = m[f"expert_gap_{span}"], m[f"expert_gap_se_{span}"]
+    g, gse = m[key(EXPERT_GAP, span=span)], m[key(EXPERT_GAP, se=True, span=span)]
     kw = dict(value=g, se=gse, k=k, min_effect=MIN_REWARD_EFFECT)
     over, under = claims["over"](**kw), claims["under"](**kw)
     head = f"the expert's own gap, what the dream pays its pushes minus what reality pays them {where}, is {g:+.3f} ± {gse:.3f} per step: "
@@ -43,8 +44,8 @@ def expert_control_words(m: dict, span: str, k: float, claims: dict = EXPERT_CON
         own = head + "the dream pays them less than reality does, beyond the noise and the minimum effect"
     else:
         own = head + "not told apart from what reality pays, by the noise and the minimum effect"
-        drift = m.get(f"gap_drift_{span}")
-        sig = m[f"expert_signal_dream_{span}"] - m[f"expert_signal_real_{span}"]
+        drift = m.get(key(GAP_TERM, term="drift", span=span))
+        sig = m[key(EXPERT_SIGNAL, world="dream", span=span)] - m[key(EXPERT_SIGNAL, world="real", span=span)]
         if drift is not None and drift * sig < 0 and min(abs(drift), abs(sig)) >= MIN_REWARD_EFFECT:
             own += (f"; but only because two errors cancel: the dream overpays standing still by {drift:+.3f} and, "
                     f"against standing still, pays the expert's pushes {sig:+.3f} against reality's")
@@ -68,8 +69,8 @@ def expert_text(m: dict, steps: dict, n: int | None = None) -> str:
     k = _k(m, n)
 
     def sig(world, span, half=""):
-        tag = f"_{half}" if half else ""
-        return m[f"expert_signal{tag}_{world}_{span}"], m[f"expert_signal{tag}_{world}_se_{span}"]
+        at = dict(part=half or None, world=world, span=span)
+        return m[key(EXPERT_SIGNAL, **at)], m[key(EXPERT_SIGNAL, se=True, **at)]
 
     H = steps["train_horizon"]
     solves = expert_solves_most(success_rate=m["expert_real_success_rate"])

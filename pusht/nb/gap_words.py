@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..metric_keys import GAP, GAP_TERM, key
 from ..config import Config
 from ..env import SUCCESS_ANG, SUCCESS_POS, obs_to_pose
 from .fmt import apart
@@ -65,10 +66,11 @@ def test_words(k: float = K_SE) -> str:
 TEST_WORDS = test_words()
 
 
-def _term_args(m: dict, key: str, span: str, half: str = "") -> tuple[float, float]:
-    """(value, se) of ``key`` ("imagination_gap" or "gap_<term>") over ``span``, for a half or all."""
-    tag = f"_{half}" if half else ""
-    return m[f"{key}{tag}_{span}"], m[f"{key}_se{tag}_{span}"]
+def _term_args(m: dict, term: str | None, span: str, half: str = "") -> tuple[float, float]:
+    """(value, se) of the gap (``term`` None) or of one of its terms over ``span``, for a half or all."""
+    template, at = (GAP, {}) if term is None else (GAP_TERM, {"term": term})
+    at.update(part=half or None, span=span)
+    return m[key(template, **at)], m[key(template, se=True, **at)]
 
 
 def clearly_positive(value: float, se: float, k: float = K_SE) -> bool:
@@ -201,7 +203,7 @@ def dominant_half(m: dict, span: str, se_diff: float | None = None, k: float | N
     more than k standard errors of the two halves' difference, ``se_diff`` (per start,
     :func:`half_difference_se`; without it, the sum of the halves' own standard errors, a
     conservative bound), and the minimum effect; None when neither is (claim ``04.half_dominates``)."""
-    (p, pse), (y, yse) = (_term_args(m, "imagination_gap", span, h) for h in HALVES)
+    (p, pse), (y, yse) = (_term_args(m, None, span, h) for h in HALVES)
     se = pse + yse if se_diff is None else se_diff
     k = _k(m) if k is None else k
     for which, a, b in (("yaw", y, p), ("position", p, y)):
@@ -215,7 +217,7 @@ def dominance_sentence(m: dict, span: str, se_diff: float | None = None, k: floa
     """Which half of the gap is the larger on this run, in words; when neither is, which condition
     failed (the larger half not positive, the difference within the noise, or under the minimum
     effect)."""
-    (p, pse), (y, yse) = (_term_args(m, "imagination_gap", span, h) for h in HALVES)
+    (p, pse), (y, yse) = (_term_args(m, None, span, h) for h in HALVES)
     k = _k(m) if k is None else k
     which = dominant_half(m, span, se_diff, k)
     name = "gap"
@@ -224,7 +226,7 @@ def dominance_sentence(m: dict, span: str, se_diff: float | None = None, k: floa
             "a conservative bound on its standard error (the sum of the halves' standard errors)")
     noise = (f"{se:.3f}, its standard error over the starts" if se_diff is not None else
              f"{se:.3f}, the sum of the halves' standard errors, a conservative bound")
-    total = m[f"imagination_gap_{span}"]
+    total = m[key(GAP, span=span)]
     shares = (f", that is {p / total:.0%} and {y / total:.0%} of the {name}"
               if p > 0 and y > 0 and total > 0 else "")
     if which is None:
@@ -257,21 +259,21 @@ def split_sentence(m: dict, span: str, steps: int, rollouts: dict | None = None,
     its position and yaw halves, and which half of the gap is the larger (judged on the per-start
     difference of the halves when the run's ``rollouts`` are given)."""
     k = _k(m, n)
-    gap, gse = m[f"imagination_gap_{span}"], m[f"imagination_gap_se_{span}"]
+    gap, gse = m[key(GAP, span=span)], m[key(GAP, se=True, span=span)]
     rosy = gap_rosy(gap=gap, se=gse, k=k, min_effect=MIN_REWARD_EFFECT)
 
-    def halves(key):
-        (p, _), (y, _) = (_term_args(m, key, span, h) for h in HALVES)
+    def halves(term):
+        (p, _), (y, _) = (_term_args(m, term, span, h) for h in HALVES)
         return f"position {p:+.3f}, yaw {y:+.3f}"
 
     parts = []
     for term, label in TERMS.items():
-        v, se = m[f"gap_{term}_{span}"], m[f"gap_{term}_se_{span}"]
+        v, se = _term_args(m, term, span)
         share = f", {v / gap:.0%} of the gap" if rosy else ""
-        parts.append(f"{label} **{v:+.3f}** ± {se:.3f} ({halves(f'gap_{term}')}; "
+        parts.append(f"{label} **{v:+.3f}** ± {se:.3f} ({halves(term)}; "
                      f"{describe(v, se, f'{term} {span}', k)}{share})")
     return (f"Over the first **{steps} steps** ({SPANS[span]}) the gap is **{gap:+.3f}** ± {gse:.3f} per step "
-            f"({halves('imagination_gap')}): " + "; ".join(parts) + ". "
+            f"({halves(None)}): " + "; ".join(parts) + ". "
             + dominance_sentence(m, span, None if rollouts is None else half_difference_se(
                 rollouts, steps if span == "train_horizon" else None), k))
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..metric_keys import RETURN, key
 from ..env import SUCCESS_POS
 from .fmt import num, tk
 from .horizon_claims import (_plain_list, ex2_letter_decided, judge_change, judge_sign,
@@ -83,8 +84,8 @@ def ex2_reconciliation(metrics: dict, n_eval: int, eval_horizon: int,
 
     gaps, imagined, real = by("imagination_gap"), by("imagined_return_per_step"), by("real_return_per_step")
     successes = {h: [round(v * n_eval) for v in vals] for h, vals in by("real_success_rate").items()}
-    gain = {w: {h: [t - u for t, u in zip(by(f"trained_{w}_return_per_step_eval_horizon")[h],
-                                          by(f"untrained_{w}_return_per_step_eval_horizon")[h])] for h in gaps}
+    gain = {w: {h: [t - u for t, u in zip(by(key(RETURN, policy="trained", world=w, span="eval_horizon"))[h],
+                                          by(key(RETURN, policy="untrained", world=w, span="eval_horizon"))[h])] for h in gaps}
             for w in ("dream", "real")}                                # what training changed, per world
     return (ex2_verdict(gaps),
             reconcile_text(gaps, n_eval, eval_horizon) + "\n"
