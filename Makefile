@@ -110,7 +110,7 @@ run: setup
 	$(PY) -m pusht.dreamer --seed 0 --out runs/seed0
 
 test: setup sandbox icu browser
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q --durations=30   # the 30 slowest tests, named in every CI log
 
 # The fast lane: the tests not marked `slow` (pyproject.toml says what slow means; tests/conftest.py
 # marks the tests that ask for the executed notebooks, PyICU or Chromium, and the lanes; the other
