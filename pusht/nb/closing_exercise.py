@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 
+from ..env import SUCCESS_POS
 from .closing_changes import COUNT_P, _steps, gap_change, success_rose, successes
 from .closing_claims import count_beyond_chance, drift_crossed_zero, ex3_letter_decided
 from .closing_words import (_change_words, _halves, _ratio_words, _side_words, _sign_change_words,
@@ -20,7 +21,8 @@ from .stats import MIN_REWARD_EFFECT, count_rise_p, margin_words
 EX3_OPTIONS = options("06_closing_the_gap", "ex3")
 
 
-EX3_NOTE = note("06_closing_the_gap", "ex3", min_effect=f"{MIN_REWARD_EFFECT:.2f}")
+EX3_NOTE = note("06_closing_the_gap", "ex3", min_effect=f"{MIN_REWARD_EFFECT:.2f}",
+                tolerance_cm=f"{SUCCESS_POS * 100:.0f}")
 
 
 def ex3_verdict(rounds: list) -> str:
