@@ -71,10 +71,11 @@ def shared_stages(bundle: bytes, course: Path, jobs: int, scheduler, timeout: in
 
 def grader_fingerprint(timeout: int, confine: bool, limits: dict) -> str:
     """Everything besides the submission that decides a student's results: the solutions, the
-    grader's code and tests, the package, the settings. A change to any of it regrades everyone."""
+    grader's code and tests, the package (its code and its words, ``pusht/nb/text/*.md``, which the
+    feedback quotes), the settings. A change to any of it regrades everyone."""
     h = hashlib.sha256(json.dumps([timeout, confine, sorted(limits.items())]).encode())
     files = sorted(SOURCE.glob("*.ipynb")) + sorted(HERE.glob("*.py")) + \
-        sorted((ROOT / "pusht").rglob("*.py"))
+        sorted((ROOT / "pusht").rglob("*.py")) + sorted((ROOT / "pusht").rglob("*.md"))
     for p in files:
         h.update(p.relative_to(ROOT).as_posix().encode() + b"\0" + p.read_bytes())
     return h.hexdigest()

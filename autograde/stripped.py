@@ -104,8 +104,8 @@ def build(dest: Path) -> Path:
 
 
 def _fingerprint() -> str:
-    h = hashlib.sha256()
-    for path in sorted(PACKAGE_DIR.rglob("*.py")):
+    h = hashlib.sha256()     # the package's code and its words (pusht/nb/text/*.md), which it copies
+    for path in sorted(PACKAGE_DIR.rglob("*.py")) + sorted(PACKAGE_DIR.rglob("*.md")):
         if "__pycache__" not in path.parts:
             h.update(str(path.relative_to(PACKAGE_DIR)).encode() + b"\0" + path.read_bytes())
     return h.hexdigest()[:16]

@@ -1,10 +1,11 @@
 """Self-check questions: answered in the notebook and checked on the spot, never graded.
 
-A notebook's questions live in its support module (``pusht.nb.<name>.SELF_CHECKS``), so the
-notebook shows only the question; the learner types a letter and runs the cell::
+A notebook's questions are written in ``pusht/nb/text/<notebook>.md`` and loaded
+(``pusht.nb.prose``) into its support module's ``SELF_CHECKS``, so the notebook shows only the
+question; the learner types a letter and runs the cell::
 
     from pusht.nb.actor import SELF_CHECKS
-    ask(SELF_CHECKS["critic_slope"], "")      # put your letter between the quotes
+    ask(SELF_CHECKS["lam_one"], "")      # put your letter between the quotes
 
 An empty answer shows the question and its options; a letter is checked at once, with the reason
 shown either way. Nothing is recorded and nothing raises: a self-check never stops a notebook.

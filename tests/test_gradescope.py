@@ -90,6 +90,7 @@ def test_the_zip_is_laid_out_as_gradescope_asks(bundle):
     assert set(course) >= {f"autograde/{p.name}" for p in (ROOT / "autograde").glob("*.py")} - \
         {"autograde/manual_grade.py", "autograde/dask_preload.py"}
     assert set(course) >= {p.relative_to(ROOT).as_posix() for p in (ROOT / "pusht").rglob("*.py")}
+    assert set(course) >= {p.relative_to(ROOT).as_posix() for p in (ROOT / "pusht" / "nb" / "text").glob("*.md")}
     # only what grading needs: no solutions, no test classes, no site builder, no tests, no mark scheme
     unneeded = ("solutions/", "autograde/classes/", "chapter_site/", "tests/", "scripts/", "notebooks/", "text/",
                 "benchmarks/", "README.md", "docs/", "requirements.txt", "autograde/mark_scheme.yaml",

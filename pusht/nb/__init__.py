@@ -17,8 +17,9 @@ Notebooks 03-06 keep the rest in rooms named after them, re-exported by the note
 
 and the rooms they all share: ``session`` (the set-up cell's ``setup``), ``stats`` (the tests behind
 every verdict, with the minimum effect that matters), ``fmt`` (how a number is printed in a
-sentence), ``claims`` (the registry of claims about a run, checked by ``make claims``) and
-``timing`` (each notebook's measured time).
+sentence), ``claims`` (the registry of claims about a run, checked by ``make claims``),
+``timing`` (each notebook's measured time) and ``prose`` (the fixed words: self-checks, exercise
+options and notes, read from one Markdown file per notebook in ``text/``).
 
 Figure functions are named ``fig_*``. Every notebook's set-up cell is one call, ``setup`` (module
 ``pusht.nb.session``): the notebook's config, its folders under ``OUT``, and its ``show``::

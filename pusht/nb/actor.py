@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..selfcheck import Question
 from . import figure
+from .prose import self_checks
 
 # Re-exported: notebook 03 and learners' released copies import these from here.
 from ..imagination import actor_params, lambda_return, set_gradients  # noqa: F401
@@ -106,48 +106,4 @@ def fig_critic_and_std(hist: dict):
 
 
 # --- self-checks -------------------------------------------------------------------------------
-SELF_CHECKS = {
-    "lam_one": Question(
-        "With `lam = 1`, which critic value still enters the return G_0?",
-        {"a": "None: lam = 1 is the pure sum of the dreamed rewards",
-         "b": "Only V_H, the value of the last dreamed state, discounted by gamma^H",
-         "c": "All of V_1 .. V_H, each weighted equally"},
-        "b", "G_H = V_H closes the recursion; every (1 - lam) V_{t+1} term vanishes, but the last "
-             "state's value is still added, discounted by gamma^H."),
-    "critic_detach": Question(
-        "Suppose your critic loss read the imagined states WITHOUT detaching them, and the loop "
-        "put the gradients on the parameters with `set_gradients`, as shown above. What would change?",
-        {"a": "Nothing: `set_gradients` differentiates the critic loss with respect to the critic's "
-              "weights only, so what it would send into the states lands on no parameter. The detach "
-              "becomes essential when both losses go into one summed `backward()`",
-         "b": "Its gradient would reach the actor's weights through the dream, so value regression "
-              "would move the policy (toward states that are easy to predict)",
-         "c": "The critic would learn faster because it sees more gradient"},
-        "a", "`torch.autograd.grad(critic_loss, critic_params)` computes the gradient on the critic's "
-             "weights and nothing else; the states' part of it is never put on any parameter. DreamerV1 "
-             "works the same way: its value loss reads the imagined features without a stop-gradient, "
-             "on a tape of its own whose gradient only the value model's optimiser applies "
-             "(`danijar/dreamer`, `Dreamer._train`). (b) is what happens in a loop that sums both losses "
-             "into one `backward()` (one optimiser for both networks): every gradient then lands on "
-             "every parameter it reaches. The cells below measure both set-ups on your losses. Keep the detach anyway: "
-             "it makes the critic loss safe under either set-up, and costs nothing."),
-    "page_wiring": Question(
-        "Under the chapter page's wiring (values detached inside the actor's return), what does "
-        "the actor learn from the critic?",
-        {"a": "Nothing: its gradient comes only from the H dreamed rewards, so replacing the "
-              "critic by zeros gives the same actor",
-         "b": "The value of the states beyond the horizon, through V_H",
-         "c": "Only the sign of the advantage"},
-        "a", "A detached value is a constant to the actor's gradient. The perturbation test below "
-             "checks exactly this: it changes the critic's weights and compares the page's actor "
-             "gradient before and after."),
-    "what_rises": Question(
-        "Suppose the imagined reward rises during training. What would that, on its own, tell you "
-        "about the real robot?",
-        {"a": "That it improves too, maybe more slowly",
-         "b": "Nothing yet: it measures the policy against the dream's picture of the block, which "
-              "is the very thing the actor is free to exploit",
-         "c": "That the world model is accurate"},
-        "b", "Only a measurement in reality can say: the real floor below gives a first, noisy one, and "
-             "notebook 04 makes it on identical starts in both worlds."),
-}
+SELF_CHECKS = self_checks("03_imagination_actor")  # the words: pusht/nb/text/03_imagination_actor.md

@@ -74,8 +74,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..metric_keys import GAP, WM_COPY_ERR, WM_ERR, key
-from ..selfcheck import Question
 from . import figure
+from .prose import self_checks
 from .closing_changes import (SPAN_KEYS, _dream_key, _real_key, _series, _steps, displacement_se_bound,
                               successes, toward_se_bound)
 from .closing_words import DATA_LABELS
@@ -304,52 +304,4 @@ def fig_fixes(state_m: dict, loop_last_m: dict, delta_m: dict, ens_m: dict, labe
 
 
 # --- self-checks ----------------------------------------------------------------------------------
-SELF_CHECKS = {
-    "dream_side": Question(
-        "Suppose a loop's world model gets more accurate on the policy's own data and the gap shrinks, yet the "
-        "policy earns no more in reality than before. How can both be true? (Whether that is what happened on "
-        "your run, the numbers above say; this is about what is possible.)",
-        {"a": "They cannot: a more accurate model always yields a better policy",
-         "b": "Trained on what this policy's actions really do, the model stops promising what they do not "
-              "deliver: the dream's rating comes down to reality's. The gap is a difference, and it closes just "
-              "as well when only the dream moves",
-         "c": "The gap is measured on new evaluation starts each round, so the rounds cannot be compared"},
-        "b", "The gap is imagined minus real return. Fitting the model to the policy's data can correct the "
-             "imagined side for this policy; nothing in that by itself makes the real side rise. Read both "
-             "ratings, not only their difference."),
-    "shared_bias": Question(
-        "Three world models are trained on the same data, each from its own initial weights and batch order. "
-        "Why can they agree closely with each other and still all be wrong about the policy's real data?",
-        {"a": "Because the disagreement penalty trains the members to agree",
-         "b": "Because what they learn is set by the data: where the data never show something, every member "
-              "fills it in with the same regularity the data did show. Disagreement measures how their guesses "
-              "differ, not how far their common guess is from reality",
-         "c": "Because three members are too few to disagree at all"},
-        "b", "Random initialisation and batch order make members differ only where the data leave them free. "
-             "A bias the data put into all of them (blocks that approach the target, a pusher never at a wall) "
-             "is shared, and a penalty on their spread cannot see it. The penalty shapes the actor, not the "
-             "members."),
-    "delta_runaway": Question(
-        "Suppose a world model that predicts the change from one frame to the next beats copy-last one step ahead "
-        "on every dimension, yet its 100-step dream runs far off, even off the table. How can both be true? "
-        "(Whether your delta model did either, the sentence above says.)",
-        {"a": "One step ahead, each prediction starts from the true previous frame; in a dream each step adds its "
-              "small error to the sum of all the earlier ones, with no true frame to pull it back, and training "
-              "on 16-step clips never penalised what 100 accumulated steps do",
-         "b": "The one-step error was measured on the training data",
-         "c": "Copy-last is so weak that beating it means the model is wrong"},
-        "a", "A one-step test anchors the model to the truth at every step; a dream never does. Summing changes "
-             "has nothing that keeps the result inside the arena, while a model that decodes positions is pulled "
-             "toward positions it was trained on."),
-    "fixed_norm": Question(
-        "The loop normalises every round's data with the mean and standard deviation of the EXPERT frames, "
-        "fixed, rather than recomputing them on all the data seen so far. Why?",
-        {"a": "To save the time it takes to compute a mean",
-         "b": "Because the policy's data have the same mean and spread as the expert's",
-         "c": "The world model and the actor keep training from last round's weights, which read normalised "
-              "inputs: new statistics would change what every input number means under those weights. Fixed, "
-              "a number means the same physical state in every round"},
-        "c", "Continuing training assumes the inputs keep their meaning. Re-normalising would shift every input "
-             "under trained weights at once, and a round's change could then come from the new scale rather "
-             "than the new data. (The errors above are in metres either way.)"),
-}
+SELF_CHECKS = self_checks("06_closing_the_gap")  # the words: pusht/nb/text/06_closing_the_gap.md

@@ -6,35 +6,23 @@ from __future__ import annotations
 
 import math
 
+from ..env import SUCCESS_POS
 from .closing_changes import COUNT_P, _steps, gap_change, success_rose, successes
 from .closing_claims import count_beyond_chance, drift_crossed_zero, ex3_letter_decided
 from .closing_words import (_change_words, _halves, _ratio_words, _side_words, _sign_change_words,
                             path_words, policy_specific_words, reopen_words, sides)
 from .fmt import num, pm
+from .prose import note, options
 from .stats import MIN_REWARD_EFFECT, count_rise_p, margin_words
 
 
 # --- Exercise 3 ---------------------------------------------------------------------------------
-EX3_OPTIONS = {
-    "a": "The gap **shrinks** and real success **rises**: more real evaluation episodes succeed after the last "
-         "round than in round 0.",
-    "b": "The gap **shrinks**, but real success **does not rise**: no more real evaluation episodes succeed after "
-         "the last round than in round 0 (0% in both, on most seeds).",
-    "c": "The gap **does not shrink** (as the note defines it: it stays within the noise, moves by less than "
-         "the minimum effect, grows, or changes sign), and real success **does not rise**.",
-    "d": "The gap **does not shrink** (as the note defines it), yet real success **rises**.",
-}
+# The words: pusht/nb/text/06_closing_the_gap.md; the note's number, from the constant that decides the verdict.
+EX3_OPTIONS = options("06_closing_the_gap", "ex3")
 
 
-EX3_NOTE = ("\"Shrinks\" means: the gap's size |imagined minus real reward per step| over the whole "
-            "evaluation is smaller after the last round than in round 0 (1) by more than the noise of the two "
-            "measurements allows: k standard errors of the change, a t-test on the two rounds' means over the "
-            "evaluation starts, k from Student's t at 95% two-sided; and (2) by at least the minimum effect "
-            f"that matters, {MIN_REWARD_EFFECT:.2f} reward per step (the reward of holding the block 2 cm, the "
-            "success tolerance, nearer the target on every step). A gap that ends on the other side of zero, "
-            "beyond the noise at both ends, has changed sign, not shrunk: the dream traded one error for the "
-            "opposite one. \"Rises\" means: more real successes after the last round than in round 0, "
-            "where one success counts (a success is an event, not an estimate).")
+EX3_NOTE = note("06_closing_the_gap", "ex3", min_effect=f"{MIN_REWARD_EFFECT:.2f}",
+                tolerance_cm=f"{SUCCESS_POS * 100:.0f}")
 
 
 def ex3_verdict(rounds: list) -> str:

@@ -21,8 +21,8 @@ import numpy as np
 from ..metric_keys import EXPERT_SIGNAL, GAP, GAP_TERM, RETURN, ZERO_BLOCK_MOVED, key
 from ..split import PARTS
 from ..env import SUCCESS_ANG, SUCCESS_POS, obs_to_pose
-from ..selfcheck import Question
 from . import figure
+from .prose import self_checks
 from .gap_words import SPANS, TERMS, _k, _yaw_deg
 from .stats import MIN_REWARD_EFFECT
 
@@ -304,34 +304,4 @@ def fig_pusher_paths(real_roll, touch_tol: float, seconds: float, seed: int, n: 
 
 
 # --- self-checks ---------------------------------------------------------------------------------
-SELF_CHECKS = {
-    "zero_control": Question(
-        "Why does the zero-action control need to be run in reality too, not only in the dream?",
-        {"a": "It does not: in reality a pusher that never moves changes nothing",
-         "b": "Because only the difference between the two worlds, for the same policy and the same "
-              "starts, says how rosy the dream is; the real run gives the reward of the spawn pose",
-         "c": "To check that pymunk is deterministic"},
-        "b", "Drift is defined as dream minus reality for the same policy; with zero actions, "
-             "reality is the spawn pose's reward, the baseline the dream is judged against."),
-    "two_horizons": Question(
-        "Training's share of the gap can differ between the actor's training horizon and the whole "
-        "evaluation. Why measure it at the training horizon at all?",
-        {"a": "Because the actor's gradient only ever saw dreams of that length: exploitation, if "
-              "any, must show up there first",
-         "b": "Because the evaluation is too noisy over its whole length",
-         "c": "Because the real simulator cannot run longer than that"},
-        "a", "The actor optimised the lambda-return of its training dreams; whatever it learned to "
-             "exploit, if anything, pays off within them. Past that horizon the model drifts on its own, "
-             "and the training term there mixes exploitation with what the actor does to a dream it "
-             "was never trained on."),
-    "shift": Question(
-        "A world model can predict its own kind of data well (notebook 01 measured it on held-out "
-        "expert clips). Why is that not enough to trust it on the deployed policy's data?",
-        {"a": "It is enough: the pusher's kinematics do not depend on who commands it",
-         "b": "Because a policy can visit states the training data never shows (for example the "
-              "pusher pinned against a wall), and a model is only measured where its data was",
-         "c": "Because the policy's actions are larger than the expert's"},
-        "b", "A model is fitted, and tested, where its data was. If the policy drives the pusher where "
-             "the expert never went (into a wall that stops it, say), the model never saw what happens "
-             "there. The replay error above measures what that costs on this run."),
-}
+SELF_CHECKS = self_checks("04_imagination_gap")  # the words: pusht/nb/text/04_imagination_gap.md

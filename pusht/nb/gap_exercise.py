@@ -7,20 +7,12 @@ from __future__ import annotations
 from .gap_claims import (COUNT_P, drift_half_of_gap, drift_half_on_means, ex1_letter_decided, gap_rosy,
                          real_success, real_success_beyond_chance)
 from .gap_words import DEFAULT_STARTS, _k, k_se, test_words
+from .prose import options
 from .stats import MIN_REWARD_EFFECT, count_rise_p
 
 
 # --- Exercise 1 ---------------------------------------------------------------------------------
-EX1_OPTIONS = {
-    "a": "It transfers: real successes appear, more of them than a pusher that never moves gets by chance.",
-    "b": "No real success beyond chance, and the dream rates the trained policy well above reality; the rosy "
-         "part comes with the actor's actions (a pusher that never moves would be rated about as "
-         "reality rates it).",
-    "c": "No real success beyond chance, and the dream rates the trained policy well above reality; but it is "
-         "rosy even for a pusher that never moves (zero actions already get at least half of the "
-         "trained policy's gap).",
-    "d": "No real success beyond chance, and the dream is no rosier than reality.",
-}
+EX1_OPTIONS = options("04_imagination_gap", "ex1")  # the words: pusht/nb/text/04_imagination_gap.md
 
 
 def ex1_verdict(metrics: list[dict], n: int | None = None) -> str:

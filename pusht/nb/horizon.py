@@ -39,8 +39,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..selfcheck import Question
 from . import figure
+from .prose import self_checks
 from .horizon_words import DT
 from .stats import sign_test
 
@@ -206,46 +206,4 @@ def fig_block_over_time(curves: dict, dt: float = DT, zero: dict | None = None):
 
 
 # --- self-checks --------------------------------------------------------------------------------
-SELF_CHECKS = {
-    "same_model": Question(
-        "Every run in this notebook's sweep loads the same frozen world model. What differs between "
-        "a run trained with 5-step dreams and one trained with 30-step dreams?",
-        {"a": "The world model's weights: each horizon retrains it",
-         "b": "Only the actor-critic trained on the model; the evaluation (starts, length, both "
-              "worlds) is the same for every run",
-         "c": "The evaluation: each run is evaluated over its own horizon"},
-        "b", "The world model is trained once and frozen; `imag_horizon` is read only while the actor "
-             "learns. Every policy is then judged over the same `eval_horizon` steps from the same starts."),
-    "spread": Question(
-        "A change of the gap counts only if it passes two tests: it beats the spread across actor seeds "
-        "(a t-test), and it is at least the minimum effect that matters (a reward per step fixed in "
-        "advance). Why both?",
-        {"a": "The spread says whether seed luck could explain the change; the minimum effect says whether "
-              "it is large enough to mean the policy does something different. A change can pass the first "
-              "and still be too small to matter, or be large and still within what luck produces",
-         "b": "Because the t-test alone would make the verdict slower to compute",
-         "c": "Because the spread across seeds is always smaller than the minimum effect"},
-        "a", "The seed-to-seed spread is this experiment's noise, measured: a change must beat it (with few "
-             "seeds the threshold in standard errors is larger, Student's t). Beating the noise says the "
-             "change is real, not that it is large: with many seeds a change of a thousandth of a reward per "
-             "step would pass. The minimum effect is the size below which no change counts."),
-    "drift_same": Question(
-        "Every run of the sweep evaluates zero actions from the same starts, in the same frozen world model "
-        "and in the same real simulator. Should the drift term (the zero-action dream minus zero-action "
-        "reality) differ between runs trained with different horizons?",
-        {"a": "Yes: a longer horizon makes the drift larger",
-         "b": "No: zero actions from the same starts in the same frozen model give the same dream whatever "
-              "the actor learned, and the same real rollout; no actor is involved in it",
-         "c": "Yes: the critic is reset between runs, so the drift changes with it"},
-        "b", "The drift depends only on the model, the starts and the real sim. Any change with the "
-             "horizon must therefore show up in the motion or training terms; the notebook checks that the "
-             "drift came out the same in every run, and says so if it did not."),
-    "negative_gap": Question(
-        "Suppose a run's gap over the whole evaluation is negative. What does that say?",
-        {"a": "The dream rates the policy below what reality pays it: the model is gloomier about where "
-              "this policy leaves the block than the real sim is",
-         "b": "The policy solved the real task",
-         "c": "The world model is accurate for this policy"},
-        "a", "The gap is imagined minus real reward per step. Its sign says which world is rosier, not "
-             "whether either is right; a negative gap is still the model being wrong."),
-}
+SELF_CHECKS = self_checks("05_horizon")  # the words: pusht/nb/text/05_horizon.md

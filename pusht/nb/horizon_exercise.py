@@ -15,33 +15,17 @@ from .horizon_claims import (_plain_list, ex2_letter_decided, judge_change, judg
                              mech_short_horizon_exploits, mech_short_horizon_penalised,
                              penalty_beyond_training_span)
 from .horizon_words import CHANGE_WORDS, ERROR_BAR_SCOPE, SIGN_WORDS, change_phrase, horizon_line
+from .prose import note, options
 from .stats import MIN_REWARD_EFFECT
 
 
 # --- Exercise 2 ---------------------------------------------------------------------------------
-EX2_RULE = (
-    "How a change is judged: the gap at 5 steps against the gap at 30, one value per actor seed. "
-    "It **grows** or **shrinks** only if the change passes two tests: it is beyond `k` standard errors "
-    "of a paired t-test on the per-seed gaps (seed 0 at 5 steps against seed 0 at 30, and so on: `k` is Student's "
-    "t at 95%, two-sided, at the test's degrees "
-    "of freedom: the fewer the seeds, the larger `k`), and it is at least "
-    f"**{MIN_REWARD_EFFECT:.3f} reward per step**, the minimum effect that matters (the reward of holding "
-    f"the block {SUCCESS_POS * 100:.0f} cm, the success tolerance, nearer the target on every step). "
-    "Anything else is **(c)**: no change that this sweep resolves as one that matters.")
+# The words: pusht/nb/text/05_horizon.md; the numbers, from the constants that decide the verdict.
+EX2_RULE = note("05_horizon", "ex2_rule", min_effect=f"{MIN_REWARD_EFFECT:.3f}",
+                tolerance_cm=f"{SUCCESS_POS * 100:.0f}")
 
 
-EX2_OPTIONS = {
-    "a": "The gap **grows**: trained with 30-step dreams, the policy is rated higher by the dream, "
-         "relative to reality, than trained with 5-step dreams (whether or not the gap changes sign "
-         "on the way).",
-    "b": "The gap **shrinks**: trained with 30-step dreams, the policy is rated lower by the dream, "
-         "relative to reality, than trained with 5-step dreams (whether or not the gap changes sign "
-         "on the way).",
-    "c": "**No resolved change**: from 5 to 30 steps the gap does not change beyond what the spread "
-         "across actor seeds can resolve, or it changes by less than the minimum effect that matters "
-         f"({MIN_REWARD_EFFECT:.3f} per step). This is not the same as \"the gap stays put\": with few seeds "
-         "a change that matters can still go unresolved.",
-}
+EX2_OPTIONS = options("05_horizon", "ex2", min_effect=f"{MIN_REWARD_EFFECT:.3f}")
 
 
 VERDICT_LETTER = {"up": "a", "down": "b", "same": "c"}

@@ -15,6 +15,7 @@ from .horizon_claims import (_plain_list, dream_block_ends_further, dream_block_
                              dream_turns_untouched_block_away, drift_same_every_run, judge_change,
                              judge_sign, motion_same_every_horizon, real_block_ends_further,
                              real_block_ends_nearer, same_rows, seed_spread_matters)
+from .prose import note
 from .stats import LEVEL, MIN_REWARD_EFFECT, Test, clear_of_threshold, t_quantile
 
 
@@ -43,9 +44,7 @@ CHANGE_WORDS = {"up": "rose", "down": "fell",
                         "effect that matters"}
 
 
-ERROR_BAR_SCOPE = ("The ± covers the spread across actor seeds only: every run uses the same world model and the "
-                   "same evaluation starts, so it does not include how the values would move with another world "
-                   "model or other starts (the table's ± over starts is a different error).")
+ERROR_BAR_SCOPE = note("05_horizon", "error_bar_scope")  # fixed words: pusht/nb/text/05_horizon.md
 
 
 def rule_text(n_seeds: int, min_effect: float = MIN_REWARD_EFFECT, unit: str = "reward per step") -> str:

@@ -23,9 +23,9 @@ import torch
 
 from ..draw import TARGET_COLOR, draw_state, setup_arena
 from ..env import (ARENA_HALF, CONTROL_DT, SUCCESS_ANG, SUCCESS_POS, TEE_RESET_HALF, tee_outline)
-from ..selfcheck import Question
 from .world_model import _count
 from . import figure
+from .prose import self_checks
 
 # A signed mean counts as "not zero" only beyond this many standard errors of the mean over the
 # held-out sequences (each sequence's mean error is one sample): about a 95% two-sided band.
@@ -389,44 +389,4 @@ def fig_reward_error(e: dict, t_dream):
 
 
 # --- self-checks --------------------------------------------------------------------------------
-SELF_CHECKS = {
-    "off_circle": Question(
-        text="A decoded observation has sin = 0.6 and cos = 1.2: not on the unit circle. Which yaw error "
-             "does a reward that reads the direction of the vector (cos, sin) give it?",
-        options={"a": "About 27 degrees: the direction of (1.2, 0.6), whatever its length.",
-                 "b": "About 37 degrees: asin(0.6).",
-                 "c": "None: acos(1.2) is undefined, so the reward is NaN."},
-        answer="a",
-        why="atan2(0.6, 1.2) = 26.6 degrees. asin reads only one of the two numbers and acos of a cosine "
-            "above 1 is NaN; a dream decodes such pairs, so the reward must stay finite and consistent "
-            "for them."),
-    "cone_slope": Question(
-        text="The reward falls by the same amount for every 10 cm, in every direction. In a dream the "
-             "block slides 5 cm straight toward the target without being touched. What happens to the "
-             "dreamed reward for the rest of that dream?",
-        options={"a": "Nothing: the reward only pays for contact.",
-                 "b": "It is higher by 0.05 per step, exactly as if a real push had moved the block.",
-                 "c": "It is lower, because untouched motion is penalised."},
-        answer="b",
-        why="The formula reads only the block's pose: 5 cm closer is 0.05 more per step (0.1 per 10 cm), "
-            "however the block got there. It cannot tell a push from a dream's drift."),
-    "yaw_vs_position": Question(
-        text="Which costs a dreamed step more reward: the dream getting the block's yaw 30 degrees wrong, "
-             "or its position 3 cm wrong (both in the unfavourable direction)?",
-        options={"a": "The 3 cm: position is what the task is about.",
-                 "b": "The 30 degrees: about 0.08 per step against 0.03.",
-                 "c": "They cost the same."},
-        answer="b",
-        why="Yaw costs 0.5 per half turn: 30 degrees is 0.5 * (30 / 180) = 0.083. Position costs 0.1 per "
-            "10 cm: 3 cm is 0.03. A model that is loose with (sin, cos) moves the reward a lot."),
-    "where_error": Question(
-        text="The reward read off filtered reconstructions is close to the truth; read off the open-loop "
-             "dream it is further off. Where does the dream's reward error come from?",
-        options={"a": "From the reward formula: it is wrong on decoded frames.",
-                 "b": "From the dreamed state: the same formula is close on states filtered from real "
-                      "frames, so the error is the model drifting when it has no frames.",
-                 "c": "From the normalisation: mean and std differ between true and decoded frames."},
-        answer="b",
-        why="The same function scores both views; only the state differs. With frames the model's state "
-            "stays near the truth; without them it drifts, and the reward follows the drift."),
-}
+SELF_CHECKS = self_checks("02_reward")  # the words: pusht/nb/text/02_reward.md

@@ -22,8 +22,8 @@ import torch
 
 from ..draw import draw_state, setup_arena
 from ..env import CONTROL_DT, MAX_STEPS, OBS_NAMES, PushTEnv
-from ..selfcheck import Question
 from . import figure
+from .prose import self_checks
 
 PUSHER, BLOCK_XY, BLOCK = slice(0, 2), slice(2, 4), slice(2, 6)
 
@@ -530,50 +530,4 @@ def fig_dream_vs_true(true, dream, context: int, first_push_step: int, index: in
 
 
 # --- self-checks --------------------------------------------------------------------------------
-SELF_CHECKS = {
-    "resting_steps": Question(
-        text="Suppose, as in the counts above, the block sits still in most transitions of the data. "
-             "What does that do to copy-last's one-step error on the block?",
-        options={"a": "Nothing: copy-last is equally wrong on every step.",
-                 "b": "It is exactly zero on every resting step, so its average error is small, and a "
-                      "model must be near-perfect at rest just to tie it.",
-                 "c": "It makes copy-last worse than any trained model, since a model sees more data."},
-        answer="b",
-        why="Copy-last predicts 'no motion', which is exactly right whenever the block rests. Its whole "
-            "error comes from the pushed steps, and a model that is off by a few millimetres on every "
-            "resting step can lose to it."),
-    "low_loss": Question(
-        text="Suppose both training losses end low. Would that show the model dreams the block well?",
-        options={"a": "Yes: a low reconstruction loss means the decoded block is right.",
-                 "b": "No: both losses are measured with the real frames in front of the model, one step "
-                      "at a time; a dream has no frames, so it has to be measured open loop.",
-                 "c": "Yes, if the dynamics loss is lower than the reconstruction loss."},
-        answer="b",
-        why="Reconstruction decodes a state filtered from the very frame it is compared with, and the "
-            "dynamics loss compares latents one step ahead. Neither runs the model on its own for many "
-            "steps, which is what a dream does: that is why we compare it with copy-last open loop."),
-    "one_vs_open": Question(
-        text="A model loses to copy-last on the block one step ahead but beats it over a 14-step dream. "
-             "Which reading is consistent with both numbers?",
-        options={"a": "The model predicts pushes accurately; the one-step number is a bug.",
-                 "b": "The model has learned how contact moves the block, but only over long horizons.",
-                 "c": "The dream moves the block whether or not it is pushed: wrong while the real block "
-                      "rests, but closer than 'it never moves' once the real block has been pushed away."},
-        answer="c",
-        why="Copy-last's open-loop error grows with every real push it ignores, while it is exact before "
-            "the first one. Splitting the open-loop error at the first push (under the dream figure) "
-            "shows where each predictor wins: a model can beat copy-last on average without knowing "
-            "when the block is touched."),
-    "pre_contact": Question(
-        text="Suppose the dreamed block moves before the real pusher has touched the real block (the "
-             "numbers above say whether it does in this run). An actor will later be scored on the "
-             "dreamed block's pose. What can it learn from such a model?",
-        options={"a": "That reward comes without contact: a dreamed block can drift toward the target "
-                      "while the pusher is somewhere else.",
-                 "b": "Nothing different: the reward is exact, so the actor cannot be misled.",
-                 "c": "To push harder, because the model over-reacts to contact."},
-        answer="a",
-        why="The reward formula is exact, but it reads the imagined block. If the dream moves the block "
-            "without contact, an optimiser can collect that reward without ever pushing; notebook 04 "
-            "measures how much of the gap is exactly this."),
-}
+SELF_CHECKS = self_checks("01_world_model")  # the words: pusht/nb/text/01_world_model.md
