@@ -28,7 +28,65 @@ from . import colophon, svg, wallclock
 
 ROOT = Path(__file__).resolve().parents[1]
 
+# -- the first screen: the verdict in one sentence, then the two-worlds panel -------------------------
+
+RESULT_MARK = "<!-- the result -->"      # book/intro.md: where the sentence and the panel go
+
+
+def gap_reading(seed0: dict) -> tuple[str, float | None]:
+    """How the recorded gap reads against its own noise: "up" (the dream pays more than reality,
+    beyond ``k`` standard errors and the minimum effect that matters), "down" (the dream pays
+    less), "small" (beyond the noise, smaller than the minimum effect), "same" (not told from 0)
+    or "untested" (``meta.yaml`` holds no standard error for it). The one verdict of the
+    notebooks (:func:`pusht.nb.stats.beyond`), with ``k`` Student's t over the evaluation's starts.
+    Returns the reading and the standard error."""
+    gap, se = seed0["imagination_gap"], seed0.get("imagination_gap_se_eval_horizon")
+    if se is None or abs(seed0.get("imagination_gap_eval_horizon", gap) - gap) > 1e-9:
+        return "untested", None
+    k = stats.k_for(int(seed0["eval_episodes"]))
+    if stats.beyond(gap, se, k, stats.MIN_REWARD_EFFECT):
+        return ("up" if gap > 0 else "down"), se
+    return ("small" if stats.beyond(gap, se, k) else "same"), se
+
+
+def verdict(seed0: dict) -> str:
+    """The chapter's result in one sentence, from ``meta.yaml``'s seed 0: both worlds' reward, the
+    gap read against its noise (:func:`gap_reading`, each reading its own words) and the real
+    success (none, or how much), with the scripted expert's on the same starts where recorded.
+    HTML: the numbers are ``<strong>`` elements carrying ``data-verdict`` (the key they show)."""
+    def num(key: str, text: str) -> str:
+        return f'<strong class="num" data-verdict="{key}">{text}</strong>'
+
+    n = int(seed0["eval_episodes"])
+    reading, se = gap_reading(seed0)
+    gap = num("imagination_gap", f"{seed0['imagination_gap']:+.3f}") + (f" ± {_num(se)}" if se is not None else "")
+    gap_words = {
+        "up": f"the dream pays more than reality by an imagination gap of {gap} per step",
+        "down": f"the dream pays less than reality: an imagination gap of {gap} per step",
+        "small": (f"an imagination gap of {gap} per step, beyond the noise but under the "
+                  f"{stats.MIN_REWARD_EFFECT:.3f} that matters"),
+        "same": f"an imagination gap of {gap} per step, which {n} starts cannot tell from none",
+        "untested": f"an imagination gap of {gap} per step",
+    }[reading]
+    rate = seed0["real_success_rate"]
+    success = num("real_success_rate", f"{rate:.0%}")
+    success_words = (f"it solves {success} of the {n} held-out starts for real" if rate > 0 else
+                     f"it solves none of the {n} held-out starts for real ({success})")
+    expert = seed0.get("expert_real_success_rate")
+    if expert is not None:
+        success_words += f"; the scripted expert, from the same starts, solves {expert:.0%}"
+    return (f"Trained only inside its learned world model, the policy earns "
+            f"{num('imagined_return_per_step', format(seed0['imagined_return_per_step'], '+.3f'))} reward per step "
+            f"in the dream and {num('real_return_per_step', format(seed0['real_return_per_step'], '+.3f'))} in "
+            f"true PushT: {gap_words}, and {success_words}.")
+
+
+def verdict_html(meta: dict) -> str:
+    return f'<p class="verdict" id="verdict">{verdict(meta["seeds"][0])}</p>'
+
+
 # (meta.yaml key under seeds[0], label, format) for the headline; the browser test reads them back.
+# The order is the panel's: on a phone, two to a row, the gap and the success make the second row.
 HEADLINE = [
     ("imagined_return_per_step", "imagined reward per step, in the dream", "{:+.3f}"),
     ("real_return_per_step", "real reward per step, in true PushT", "{:+.3f}"),
@@ -37,21 +95,62 @@ HEADLINE = [
     ("imagined_final_tee_dist", "dream: the block ends this far from the target (m)", "{:.3f}"),
     ("real_final_tee_dist", "reality: the block ends this far from the target (m)", "{:.3f}"),
 ]
+BOTH = ("imagined_return_per_step", "real_return_per_step", "imagination_gap", "real_success_rate")
 
 
-def headline_html(meta: dict) -> str:
+def headline_html(meta: dict, data: dict | None = None, notebooks: list[str] = ()) -> str:
+    """The two-worlds panel: ``meta.yaml``'s seed 0 (the numbers, then the bars), and, given this
+    build's run (``data``, scrubber.json), both measurements side by side with why they differ
+    (:func:`sources_html`)."""
     seed0 = meta["seeds"][0]
     plat = meta["platform"]
     bars = svg.reward_bars(seed0["imagined_return_per_step"], seed0["real_return_per_step"],
-                           "imagined against real reward per step, seed 0")
+                           "imagined against real reward per step, seed 0, with the gap between them")
     items = "".join(f'<div class="stat"><span class="num" data-key="{k}">{fmt.format(seed0[k])}</span>'
                     f'<span class="label">{escape(label)}</span></div>' for k, label, fmt in HEADLINE)
     return (f'<section class="panel" id="two-worlds"><h2>The same policy, two worlds</h2>'
+            f'<div class="two-worlds"><div class="stats">{items}</div>{bars}</div>'
             f'<p class="meta">seed 0 · {escape(str(meta["config"]["device"]))} · '
             f'{seed0["eval_episodes"]} held-out starts · {seed0["eval_horizon"]}-step rollouts · '
             f'measured by <code>make meta</code> on {escape(plat["cpu_model"])}, torch {escape(plat["torch"])} '
             f'(<code>meta.yaml</code>)</p>'
-            f'<div class="two-worlds">{bars}<div class="stats">{items}</div></div></section>')
+            + (sources_html(meta, data, notebooks) if data is not None else "") + "</section>")
+
+
+def sources_html(meta: dict, data: dict, notebooks: list[str] = ()) -> str:
+    """The headline's two measurements side by side: ``meta.yaml``'s record (this panel) and this
+    build's run (notebook 04's headline, the curves' last point), each labelled with its config,
+    starts and host, and one sentence on why they differ (:func:`evaluation_case`)."""
+    seed0, last = meta["seeds"][0], data["frames"][-1]["eval"]
+    nb04 = next((Path(n).stem for n in notebooks if n.startswith("04")), None)
+    where = (f'<a href="notebooks/{nb04}.html#same-policy-two-worlds">notebook 04\'s headline</a> and the '
+             "curves below" if nb04 else "the curves below")
+    fmt = {k: f for k, _, f in HEADLINE}
+
+    def rows(label: str, values: dict, cls: str) -> str:
+        """One measurement: its label on a row of its own (a phone has no room beside four numbers),
+        then its numbers."""
+        return (f'<tbody class="{cls}"><tr><th colspan="{len(BOTH)}" scope="rowgroup">{label}</th></tr><tr>'
+                + "".join(f"<td>{fmt[k].format(values[k])}</td>" for k in BOTH) + "</tr></tbody>")
+
+    plat = meta["platform"]
+    recorded = (f"recorded (<code>meta.yaml</code>, the headline): {'smoke' if seed0['smoke'] else 'default'} "
+                f"config, {seed0['eval_episodes']} starts × {seed0['eval_horizon']} steps, {escape(plat['cpu_model'])}")
+    built = (f"this build's run ({where}): {escape(data['config'])} config, {data['eval_starts']} starts × "
+             f"{data['horizon']} steps, {escape(data['host'])}")
+    case = evaluation_case(data, seed0)
+    why = {"same": "The same evaluation, and the same numbers: this build reproduced the record.",
+           "differs": ("The same evaluation, other numbers: the record was measured by make meta at another commit "
+                       "or on another host, and this page shows it; notebook 04 shows what this build measured."),
+           "other": (f"Two different evaluations: this build ran the {escape(data['config'])} config, "
+                     f"{data['eval_starts']} starts of {data['horizon']} steps, a quick check of the pipeline, not "
+                     f"the record's {seed0['eval_episodes']} starts of {seed0['eval_horizon']}; the headline is "
+                     "the record's.")}[case]
+    return (f'<table class="sources" data-case="{case}"><caption>Seed 0, measured twice</caption>'
+            '<thead><tr><th scope="col">dream</th><th scope="col">real</th><th scope="col">gap</th>'
+            '<th scope="col">real success</th></tr></thead>'
+            f"{rows(recorded, seed0, 'recorded')}{rows(built, last, 'this-build')}</table>"
+            f'<p class="meta why">{why}</p>')
 
 
 def _eval_curve(data: dict, key: str) -> tuple[list[int], list[float]]:
@@ -75,7 +174,7 @@ def curves_html(data: dict, meta: dict) -> str:
     losses = svg.line_chart(
         [{"x": c["x"], "y": c["y"], **style} for c, style in (
             (data["curves"]["wm_recon"], {"label": "reconstruction", "color": svg.INK}),
-            (data["curves"]["wm_dyn"], {"label": "dynamics", "color": svg.MUTED, "dash": "5 3"}))],
+            (data["curves"]["wm_dyn"], {"label": "dynamics", "color": svg.INK, "dash": "7 4"}))],
         "world-model update", "loss (MSE, log scale)", "the world model's losses (MSE in normalised units)",
         log_y=True, chart_id="curve-wm")
     n, h, dt = data["eval_starts"], data["horizon"], data["control_dt_s"]
@@ -298,12 +397,20 @@ def notebooks_titles(notebooks: list[str]):
         yield n, Path(n).stem.replace("_", " ")
 
 
+# where each number on the page comes from, and the command that makes it: the colophon's first line
+SOURCES = ("The numbers on this page come from runs, never from prose: the headline sentence and the two-worlds "
+           "panel from <code>meta.yaml</code> (<code>make meta</code>), the curves and the scrubber from this "
+           "build's own run (<code>make chapter</code>), the wall-clock table from "
+           "<code>benchmarks/wallclock.csv</code> (<code>make bench</code>).")
+
+
 def colophon_html(commit: str, run_commit: str | None = None) -> str:
     rows = "".join(f"<tr><td>{escape(r.notebook)}</td><td><code>{escape(r.module)}</code></td>"
                    f"<td><code>{escape(r.qualname)}</code></td><td>{escape(r.lines)}</td>"
                    f'<td><code title="{r.sha256}">{r.sha256[:12]}…</code></td></tr>'
                    for r in colophon.regions())
     return ('<section class="panel" id="colophon"><h2>Colophon · provenance</h2>'
+            f"<p>{SOURCES}</p>"
             "<p>The notebooks show the package's own code, not a copy of it: each region below is "
             "displayed with <code>inspect.getsource</code>. The fingerprint is the sha256 of the text shown, "
             f"at commit <code>{escape(commit)}</code>.{_mismatch(commit, run_commit)}</p>"
@@ -323,9 +430,17 @@ def _mismatch(commit: str, run_commit: str | None) -> str:
 
 
 def page(meta: dict, data: dict, notebooks: list[str], commit: str) -> str:
-    """The landing page as MyST markdown (its panels as raw HTML)."""
-    html = "\n".join([headline_html(meta), curves_html(data, meta), scrubber_html(data), colab_html(notebooks),
+    """The landing page as MyST markdown (its panels as raw HTML). The first screen is the title,
+    the result in one sentence (:func:`verdict`) and the two-worlds panel, put where
+    ``book/intro.md`` marks :data:`RESULT_MARK`; then the chapter's method and objectives, the
+    curves, the scrubber, the notebooks, the wall-clock table and the colophon."""
+    intro = (ROOT / "book" / "intro.md").read_text()
+    head, mark, rest = intro.partition(RESULT_MARK)
+    if not mark:
+        raise ValueError(f"book/intro.md has no {RESULT_MARK!r}: where the headline goes")
+    top = "\n".join([verdict_html(meta), headline_html(meta, data, notebooks)])
+    html = "\n".join([curves_html(data, meta), scrubber_html(data), colab_html(notebooks),
                       '<section class="panel" id="wallclock"><h2>Wall-clock</h2>' + wallclock.table_html()
                       + "</section>", colophon_html(commit, data.get("commit"))])
-    intro = (ROOT / "book" / "intro.md").read_text()
-    return f"{intro}\n```{{raw}} html\n{html}\n```\n\nRead next: [the reading list](reading.md).\n"
+    return (f"{head.rstrip()}\n\n```{{raw}} html\n{top}\n```\n\n{rest.strip()}\n\n```{{raw}} html\n{html}\n```\n\n"
+            "Read next: [the reading list](reading.md).\n")

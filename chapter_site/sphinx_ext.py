@@ -1,4 +1,4 @@
-"""A Sphinx extension for the chapter site's build (book/_config.yml lists it). Two fixes:
+"""A Sphinx extension for the chapter site's build (book/_config.yml lists it). Three fixes:
 
 * Jupyter Book 1 always loads sphinx-thebe, whose start-up script then lands twice in every
   notebook page (the browser reports "Identifier 'THEBE_JS_URL' has already been declared"). The
@@ -6,9 +6,19 @@
 * Sphinx loads MathJax on a page when the page *or any page in its table of contents* has an
   equation, so the landing page, which has none, paid 1.2 MB of MathJax for the notebooks'. MathJax
   is left out of every page without an equation of its own.
+* The theme loads Font Awesome twice: as a web font from its stylesheet (what shows the icons with
+  JavaScript off) and as a 1.5 MB script that redraws each icon as SVG, 60% of the landing page's
+  weight. Every icon the site uses is in the font, so the script's tag is taken out of every page
+  and the script out of the build (:func:`drop_fontawesome_script`).
 """
 
 from __future__ import annotations
+
+import re
+from pathlib import Path
+
+FONTAWESOME_JS = "_static/scripts/fontawesome.js"
+_FONTAWESOME_TAG = re.compile(r'[ \t]*<script[^>]*src="[^"]*_static/scripts/fontawesome\.js[^"]*"[^>]*></script>\n?')
 
 
 def _mathjax(js) -> bool:
@@ -24,9 +34,30 @@ def _no_mathjax_without_math(app, pagename, templatename, context, doctree):
         scripts[:] = [js for js in scripts if not _mathjax(js)]
 
 
+def drop_fontawesome_script(outdir: Path) -> int:
+    """Take the theme's Font Awesome script out of every page under ``outdir`` and out of the build
+    (the icons stay: the theme's stylesheet draws them with the font). Returns the pages changed."""
+    changed = 0
+    for page in Path(outdir).rglob("*.html"):
+        text = page.read_text(encoding="utf-8")
+        new = _FONTAWESOME_TAG.sub("", text)
+        if new != text:
+            page.write_text(new, encoding="utf-8")
+            changed += 1
+    for f in Path(outdir).glob(FONTAWESOME_JS + "*"):       # the script, its licence and its map
+        f.unlink()
+    return changed
+
+
+def _after_build(app, exception):
+    if exception is None and app.builder.format == "html":
+        drop_fontawesome_script(Path(app.outdir))
+
+
 def setup(app):
     for listener in list(app.events.listeners.get("env-before-read-docs", [])):
         if getattr(listener.handler, "__module__", "") == "sphinx_thebe":
             app.disconnect(listener.id)
     app.connect("html-page-context", _no_mathjax_without_math, priority=900)   # after sphinx.ext.mathjax's
+    app.connect("build-finished", _after_build)
     return {"parallel_read_safe": True, "parallel_write_safe": True}

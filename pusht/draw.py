@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from .env import ARENA_HALF, PUSHER_RADIUS, obs_to_pose, tee_outline
+from .palette import TARGET
 
-TARGET_COLOR, TEE_COLOR, PUSHER_COLOR = "#2ca02c", "#7f7f7f", "#1f77b4"
+TARGET_COLOR, TEE_COLOR, PUSHER_COLOR = TARGET, "#7f7f7f", "#1f77b4"
 
 
 def setup_arena(ax, title: str | None = None):

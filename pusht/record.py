@@ -24,12 +24,14 @@ from pathlib import Path
 import numpy as np
 
 from .env import ARENA_HALF, PUSHER_RADIUS, obs_to_pose, tee_outline
+from .palette import DREAM, REAL, TARGET, rgb
 
 RERUN_MISSING = ("--rerun needs the optional package rerun-sdk, which is not installed here. "
                  "Install it with `pip install rerun-sdk` (or `pip install -e '.[rerun]'`), or leave "
                  "out --rerun.")
 
-COLORS = {"dream": (255, 127, 14), "real": (110, 110, 110), "target": (44, 160, 44),
+# the worlds' colours are the notebooks' and the site's (pusht.palette)
+COLORS = {"dream": rgb(DREAM), "real": rgb(REAL), "target": rgb(TARGET),
           "pusher": (31, 119, 180), "arena": (0, 0, 0)}
 
 

@@ -74,6 +74,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..metric_keys import GAP, WM_COPY_ERR, WM_ERR, key
+from ..palette import WORLD
 from . import figure
 from .prose import self_checks
 from .closing_changes import (SPAN_KEYS, _dream_key, _real_key, _series, _steps, displacement_se_bound,
@@ -108,7 +109,7 @@ from .stats import (  # noqa: F401
     margin_words)
 
 
-WORLD_COLORS = {"dream": "tab:purple", "real": "tab:orange"}
+WORLD_COLORS = WORLD     # one colour per world, the site's too (pusht.palette)
 
 
 DATA_COLORS = {"policy": "tab:red", "expert": "tab:blue"}

@@ -21,6 +21,7 @@ import numpy as np
 from ..metric_keys import EXPERT_SIGNAL, GAP, GAP_TERM, RETURN, ZERO_BLOCK_MOVED, key
 from ..split import PARTS
 from ..env import SUCCESS_ANG, SUCCESS_POS, obs_to_pose
+from ..palette import WORLD
 from . import figure
 from .prose import self_checks
 from .gap_words import SPANS, TERMS, _k, _yaw_deg
@@ -50,7 +51,7 @@ from .gap_words import (  # noqa: F401
 from .stats import LEVEL, beyond, count_rise_p, k_for, welch  # noqa: F401
 
 
-COLORS = {"dream": "tab:purple", "real": "tab:orange"}
+COLORS = WORLD       # one colour per world, the site's too (pusht.palette)
 
 
 POLICY_LABELS = {"zero": "zero actions", "untrained": "untrained actor", "trained": "trained actor"}

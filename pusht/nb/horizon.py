@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..palette import WORLD
 from . import figure
 from .prose import self_checks
 from .horizon_words import DT
@@ -66,7 +67,7 @@ from .stats import LEVEL, MIN_REWARD_EFFECT, Test, clear_of_threshold, paired, t
 HORIZON_COLORS = ["tab:cyan", "tab:blue", "tab:purple", "tab:red", "tab:brown"]
 
 
-WORLD_COLORS = {"dream": "tab:purple", "real": "tab:orange"}
+WORLD_COLORS = WORLD     # one colour per world, the site's too (pusht.palette)
 
 
 TERMS = {"drift": "drift (zero actions)", "motion": "untrained actor's motion",
