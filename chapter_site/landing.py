@@ -1,5 +1,6 @@
-"""The landing page, in the chapter page's form: the two worlds, the curves, the scrubber, the
-wall-clock table, the colophon and the Colab links.
+"""The landing page, in the chapter page's form: the result in one sentence and the two worlds on
+the first screen (a phone's too), then the chapter's objectives, the curves, the scrubber, the
+Colab links, the wall-clock table and the colophon.
 
 Every number comes from a file a run wrote: the headline from ``meta.yaml`` (``make meta``), the
 curves and the scrubber from ``scrubber.json`` (``make chapter``), the table from
@@ -8,9 +9,12 @@ and SVG, so the page reads with JavaScript off; the slider swaps pre-drawn SVG a
 
 The reward chart is the headline's own evaluation (the same held-out starts and horizon, both
 worlds) at every kept iteration, so its last point is the headline's when the run and ``meta.yaml``
-agree. Every sentence that compares (the reading under the chart, the scrubber's "what to notice")
-is a predicate on the run's numbers with its true alternative written out: :func:`evaluation_case`,
-:func:`lessons`, :func:`drift_text`, :func:`leaving_text`.
+agree. Every sentence that compares (the headline's sentence, the reading under the chart, the
+scrubber's "what to notice") is a predicate on the run's numbers with its true alternative written
+out: :func:`verdict` (through :func:`gap_reading`), :func:`evaluation_case`, :func:`lessons`,
+:func:`drift_text`, :func:`leaving_text`. (They are not entries of ``pusht.nb.claims``'s registry:
+that registry is the notebooks' claims, each recorded on seeds 0-9 by ``make claims``; these read
+``meta.yaml`` and the site's own run, and ``tests/test_site.py`` checks each alternative.)
 """
 
 from __future__ import annotations

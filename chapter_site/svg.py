@@ -173,7 +173,7 @@ def reward_bars(imagined: float, real: float, title: str, width: int = 320, heig
     value above its bar), and the gap between them marked: a dashed line from the imagined bar's
     end to a bracket beside the real bar, labelled. Rewards here are never positive (the best is 0)."""
     lo = min(imagined, real, -0.05)
-    yt = _ticks(lo, 0.0)
+    yt = [t for t in _ticks(lo, 0.0) if t <= 0]          # the bars hang from 0: no tick above it
     lo = min(lo, yt[0])
     labels = [_fmt(t) for t in yt]
     title_x = 4 + 0.8 * AXIS
@@ -201,7 +201,7 @@ def reward_bars(imagined: float, real: float, title: str, width: int = 320, heig
                    f'fill="{color}"/>'
                    f'<text x="{x + bw / 2}" y="{py(0) - 7:.1f}" text-anchor="middle" class="val" '
                    f'fill="{INK}">{v:+.3f}</text>'
-                   f'<text x="{x + bw / 2}" y="{height - 24}" text-anchor="middle" class="legend" '
+                   f'<text x="{x + bw / 2}" y="{height - 26}" text-anchor="middle" class="legend" '
                    f'fill="{INK}">{name}</text>'
                    f'<text x="{x + bw / 2}" y="{height - 8}" text-anchor="middle" class="tick" '
                    f'fill="{INK}">{where}</text>')
@@ -211,8 +211,8 @@ def reward_bars(imagined: float, real: float, title: str, width: int = 320, heig
                'stroke-width="1.2" stroke-dasharray="4 3"/>'
                f'<path class="bracket" d="M{bx - 4},{ya:.1f} H{bx} V{yb:.1f} H{bx - 4}" fill="none" stroke="{INK}" '
                'stroke-width="1.5"/>'
-               f'<text x="{bx + 6}" y="{(ya + yb) / 2 - 2:.1f}" class="note" fill="{INK}">gap</text>'
-               f'<text x="{bx + 6}" y="{(ya + yb) / 2 + NOTE:.1f}" class="note" fill="{INK}">'
+               f'<text x="{bx + 6}" y="{(ya + yb) / 2 - 3:.1f}" class="note" fill="{INK}">gap</text>'
+               f'<text x="{bx + 6}" y="{(ya + yb) / 2 + NOTE + 1:.1f}" class="note" fill="{INK}">'
                f"{imagined - real:+.3f}</text>")
     out.append("</svg>")
     return "".join(out)

@@ -296,3 +296,126 @@ def test_scrubber_draws_the_spawn_ghost_and_the_notice_lines(smoke_export):
         assert p["readout"]["drift"] == landing.drift_text(f, smoke_export)
         assert p["readout"]["leaving"] == landing.leaving_text(f, smoke_export)
         assert p["dream"]["ghost"] == svg.tee_points(*f["dream"]["block_mm_deg"][0], scale, 240)
+
+
+# -- the landing page at first sight (issue 42) -------------------------------------------------------
+
+def _headline(gap=0.169, se=0.013, n=100, rate=0.0, **change):
+    """meta.yaml's seed 0, as much of it as the sentence reads."""
+    return {"imagined_return_per_step": -0.237, "real_return_per_step": -0.237 - gap, "imagination_gap": gap,
+            "imagination_gap_eval_horizon": gap, "imagination_gap_se_eval_horizon": se, "eval_episodes": n,
+            "real_success_rate": rate, "expert_real_success_rate": 1.0, **change}
+
+
+def test_the_sentence_reads_the_gap_against_its_noise_with_its_true_alternatives():
+    said = landing.verdict(_headline())
+    assert "the dream pays more than reality by an imagination gap of" in said
+    assert 'data-verdict="imagination_gap">+0.169</strong> ± 0.013 per step' in said
+    assert 'solves none of the 100 held-out starts for real (<strong class="num" data-verdict="real_success_rate">0%' in said
+    assert "the scripted expert, from the same starts, solves 100%" in said
+    assert "the dream pays less than reality" in landing.verdict(_headline(gap=-0.169))
+    # beyond the noise (k = 1.98 standard errors over 100 starts) but under the minimum effect
+    assert "beyond the noise but under the 0.020 that matters" in landing.verdict(_headline(gap=0.012, se=0.001))
+    assert "which 100 starts cannot tell from none" in landing.verdict(_headline(gap=0.03, se=0.02))
+    untested = landing.verdict(_headline(imagination_gap_se_eval_horizon=None))
+    assert "an imagination gap of" in untested and "±" not in untested
+    some = landing.verdict(_headline(rate=0.12))
+    assert 'solves <strong class="num" data-verdict="real_success_rate">12%</strong> of the 100' in some
+    no_expert = _headline()
+    del no_expert["expert_real_success_rate"]
+    assert "scripted expert" not in landing.verdict(no_expert)
+    # the recorded headline: a gap that matters, and no real success
+    seed0 = yaml.safe_load((ROOT / "meta.yaml").read_text())["seeds"][0]
+    assert landing.gap_reading(seed0)[0] == "up" and "solves none" in landing.verdict(seed0)
+
+
+def test_the_first_screen_is_the_title_the_result_and_the_panel_then_the_objectives(smoke_export):
+    meta = yaml.safe_load((ROOT / "meta.yaml").read_text())
+    notebooks = sorted(p.name for p in (ROOT / "solutions").glob("*.ipynb"))
+    text = landing.page(meta, smoke_export, notebooks, "abc1234")
+    order = [text.index(s) for s in ("# World Models II", 'id="verdict"', 'id="two-worlds"', "A small world model",
+                                     "By the end you can", 'id="curves"', 'id="scrubber"', 'id="colophon"')]
+    assert order == sorted(order)
+    assert text.count(landing.SOURCES) == 1 and text.index(landing.SOURCES) > text.index('id="colophon"')
+    assert "make bench" not in (ROOT / "book" / "intro.md").read_text()      # the developers' line is the colophon's
+    for key in ("imagination_gap", "real_success_rate"):
+        value = meta["seeds"][0][key]
+        shown = f"{value:.0%}" if key == "real_success_rate" else f"{value:+.3f}"
+        assert f'data-verdict="{key}">{shown}<' in text
+
+
+def test_both_measurements_of_the_headline_side_by_side_with_why_they_differ():
+    data = dict(_run(([-0.16] * 6 + NOISE, [-0.40] * 6 + NOISE / 2), ([-0.22] * 6 + NOISE, [-0.40] * 6 - NOISE / 3)),
+                host="a laptop")
+    last = data["frames"][-1]["eval"]
+
+    def html(seed0, run=data):
+        return landing.sources_html({"platform": {"cpu_model": "the recording CPU"}, "seeds": {0: seed0}}, run,
+                                    ["01_world_model.ipynb", "04_imagination_gap.ipynb"])
+
+    same = html(_seed0(data))
+    assert 'data-case="same"' in same and "this build reproduced the record" in same
+    assert 'href="notebooks/04_imagination_gap.html#same-policy-two-worlds"' in same
+    recorded, built = re.findall(r"<tbody.*?</tbody>", same)
+    assert "meta.yaml" in recorded and "the recording CPU" in recorded and "a laptop" in built
+    assert f"<td>{last['imagination_gap']:+.3f}</td>" in built and f"<td>{last['real_success_rate']:.0%}</td>" in built
+    differs = html(_seed0(data, imagination_gap=last["imagination_gap"] + 0.01))
+    assert 'data-case="differs"' in differs and "another commit or on another host" in differs
+    other = html(_seed0(data, smoke=True))
+    assert 'data-case="other"' in other and "Two different evaluations" in other
+
+
+def test_charts_draw_in_the_themes_colour_and_the_worlds_in_the_palette(smoke_export):
+    from chapter_site import svg
+    from pusht import palette
+
+    meta = yaml.safe_load((ROOT / "meta.yaml").read_text())
+    html = landing.headline_html(meta) + landing.curves_html(smoke_export, meta) + landing.scrubber_html(smoke_export)
+    # text, axes, grid and the pusher follow the page's text colour (light or dark); only the worlds
+    # and the target are named colours, one each
+    assert set(re.findall(r'(?:fill|stroke)="([^"]+)"', html)) <= {"currentColor", "none", palette.DREAM,
+                                                                      palette.REAL, palette.TARGET}
+    assert all('fill="currentColor"' in t for t in re.findall(r"<text[^>]*>", html))
+    # the dashed line's legend key is dashed as the line is
+    wm = re.search(r'<svg[^>]*id="curve-wm".*?</svg>', html).group(0)
+    assert (re.findall(r'<polyline class="series"[^>]*stroke-dasharray="([^"]+)"', wm)
+            == re.findall(r'<line class="legend-key"[^>]*stroke-dasharray="([^"]+)"', wm) == ["7 4"])
+    # the bars hang from 0: no tick above it, and the gap is marked between them
+    bars = re.search(r'<svg class="bars".*?</svg>', html).group(0)
+    ticks = [float(v) for v in re.findall(r'class="tick" fill="currentColor">(-?[\d.]+)<', bars)]
+    assert max(ticks) == 0 and f"{meta['seeds'][0]['imagination_gap']:+.3f}" in bars and 'class="bracket"' in bars
+    assert svg.TICK >= 13                 # 10 px and more where a 400-unit chart is drawn 310 px wide or wider
+
+
+def test_one_colour_per_world_in_the_notebooks_figures_the_recording_and_the_site():
+    from matplotlib.colors import to_hex
+
+    from chapter_site import svg
+    from pusht import palette, record
+    from pusht.nb import closing, gap, horizon
+
+    assert gap.COLORS == horizon.WORLD_COLORS == closing.WORLD_COLORS == palette.WORLD
+    assert (svg.DREAM, svg.REAL, svg.TARGET) == (palette.DREAM, palette.REAL, palette.TARGET)
+    assert {w: record.COLORS[w] for w in ("dream", "real")} == {w: palette.rgb(c) for w, c in palette.WORLD.items()}
+    # the notebooks drew tab:purple and tab:orange before: their figures look as they did
+    assert (to_hex("tab:purple"), to_hex("tab:orange"), to_hex("tab:green")) == (palette.DREAM, palette.REAL,
+                                                                                   palette.TARGET)
+
+
+def test_the_font_awesome_script_leaves_every_page_and_the_build(tmp_path):
+    from chapter_site.sphinx_ext import drop_fontawesome_script
+
+    scripts = tmp_path / "_static" / "scripts"
+    scripts.mkdir(parents=True)
+    for name in ("fontawesome.js", "fontawesome.js.map", "fontawesome.js.LICENSE.txt", "bootstrap.js"):
+        (scripts / name).write_text("//")
+    head = ('<head>\n  <script defer src="{0}_static/scripts/fontawesome.js?digest=55c2"></script>\n'
+            '  <script defer src="{0}_static/scripts/bootstrap.js?digest=55c2"></script>\n</head>')
+    (tmp_path / "notebooks").mkdir()
+    (tmp_path / "index.html").write_text(head.format(""))
+    (tmp_path / "notebooks" / "01.html").write_text(head.format("../"))
+    assert drop_fontawesome_script(tmp_path) == 2
+    for page in (tmp_path / "index.html", tmp_path / "notebooks" / "01.html"):
+        text = page.read_text()
+        assert "fontawesome" not in text and "bootstrap.js" in text
+    assert [p.name for p in scripts.iterdir()] == ["bootstrap.js"]
