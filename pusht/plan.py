@@ -82,10 +82,15 @@ class PlanSettings:
     """Floor of the refitted spread, so the search never collapses to a point."""
     warm: bool = True
     """Start each real step's search from the previous step's final mean (else from zero actions)."""
+    window: int = 0
+    """Real steps the model's state is filtered over before each plan: 0, all of them since the start;
+    w, only the last w (from h = 0, as the model's training clips begin), the rest forgotten."""
     starts: int = 30
     """Held-out evaluation starts (the first of the chapter's, env.reset seeds from data.EVAL_SEED_BASE)."""
 
     def validate(self) -> None:
+        if not isinstance(self.window, int) or self.window < 0:
+            raise ValueError(f"window must be a whole number, 0 or more, got {self.window!r}")
         for name in ("horizon", "knots", "samples", "iters", "elites", "starts"):
             v = getattr(self, name)
             if not isinstance(v, int) or isinstance(v, bool) or v < 1:
@@ -179,6 +184,11 @@ def plan_rollout(wm, seeds, horizon: int, mean, std, s: PlanSettings, batched: b
     steps = range(horizon)
     for t in (labelled(progress, "planning" if batched else "planning, one start at a time") or iter)(steps):
         norm = torch.as_tensor((obs[t] - mean_np) / std_np, dtype=torch.float32, device=mean.device)
+        if s.window and t > s.window:       # re-filter from h = 0 over the last `window` real steps only
+            lo = t - s.window
+            ctx = torch.as_tensor((obs[lo:t + 1] - mean_np) / std_np, dtype=torch.float32).transpose(0, 1)
+            h, _ = wm.filter(ctx, torch.as_tensor(actions[lo:t], dtype=torch.float32).transpose(0, 1))
+            h = h[:, -1]
         z = wm.filter_step(h, norm)
         ids = np.flatnonzero(live)
         tid = torch.as_tensor(ids)
@@ -390,6 +400,8 @@ def main(argv=None) -> int:
         s.validate()
     except ValueError as e:
         parser.error(str(e))
+    if args.rerun:
+        parser.error("--rerun records the actor's run (python -m pusht.dreamer); the planner has no recording")
     if args.out is None:
         cfg = cfg.replace(out=Path(f"runs/plan-seed{cfg.seed}"))
     cache = None if args.no_cache else (args.cache or default_cache_dir())

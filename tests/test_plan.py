@@ -1,6 +1,7 @@
 """Notebook 07's package part: the richer data's options, the gate, and the planner (CEM in the frozen
 world model), each checked on tiny inputs (issue 41, item 2)."""
 
+import dataclasses
 import subprocess
 import sys
 from pathlib import Path
@@ -127,13 +128,14 @@ def test_the_planner_is_deterministic_per_seed(tiny_model):
     assert np.abs(a.actions).max() <= 1 and a.rewards.shape == (3, 2)
 
 
-def test_batched_planning_gives_the_actions_of_one_start_at_a_time(tiny_model):
+@pytest.mark.parametrize("window", [0, 2])
+def test_batched_planning_gives_the_actions_of_one_start_at_a_time(tiny_model, window):
     wm, mean, std = tiny_model
-    seeds = start_seeds(EVAL_SEED_BASE, 0, 3)
-    batched = plan_rollout(wm, seeds, 3, mean, std, TINY)
-    serial = plan_rollout(wm, seeds, 3, mean, std, TINY, batched=False)
+    seeds, s = start_seeds(EVAL_SEED_BASE, 0, 3), dataclasses.replace(TINY, window=window)
+    batched = plan_rollout(wm, seeds, 4, mean, std, s)
+    serial = plan_rollout(wm, seeds, 4, mean, std, s, batched=False)
     np.testing.assert_allclose(batched.actions, serial.actions, atol=1e-5)
-    alone = plan_rollout(wm, seeds[1:2], 3, mean, std, TINY)                  # a start alone, as in a batch
+    alone = plan_rollout(wm, seeds[1:2], 4, mean, std, s)                     # a start alone, as in a batch
     np.testing.assert_allclose(alone.actions[:, 0], batched.actions[:, 1], atol=1e-5)
 
 
@@ -142,6 +144,7 @@ def test_batched_planning_gives_the_actions_of_one_start_at_a_time(tiny_model):
     (dict(elites=300), "elites (300) must be at most samples (256)"),
     (dict(samples=0), "samples must be a whole number, at least 1"),
     (dict(init_std=0.0), "init_std must be in (0, 2]"),
+    (dict(window=-1), "window must be a whole number, 0 or more"),
 ])
 def test_plan_settings_are_validated(change, message):
     with pytest.raises(ValueError) as e:
