@@ -47,6 +47,9 @@ class Config:
     """Extra training sequences of a random walk of the pusher (smooth random actions, no expert)."""
     data_noise: float = 0.3
     """Std of the noisy expert's action noise (actions live in [-1, 1]); read only with data_noisy_episodes."""
+    data_poke_episodes: int = 0
+    """Extra training sequences of the random walk from beside the block, its first step a push into it
+    (contacts in every direction: the expert's pushes all head for the target)."""
 
     # --- world model (3.1's, deterministic latent) -----------------------------------------------
     latent_dim: int = 16
@@ -138,7 +141,8 @@ class Config:
         for name in ["wm_epochs", "context", "actor_seed"]:
             if getattr(self, name) < 0:
                 raise ValueError(f"{name} must be 0 or more, got {getattr(self, name)}")
-        for name in ["n_episodes", "data_noisy_episodes", "data_pause_episodes", "data_random_episodes"]:
+        for name in ["n_episodes", "data_noisy_episodes", "data_pause_episodes", "data_random_episodes",
+                     "data_poke_episodes"]:
             v = getattr(self, name)
             if not isinstance(v, int) or isinstance(v, bool) or not 0 <= v <= MIX_STRIDE:
                 raise ValueError(f"{name} must be a whole number from 0 to {MIX_STRIDE} (each kind of "

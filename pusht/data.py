@@ -11,7 +11,10 @@ each from its own starts (so the expert's sequences are the same with or without
 * ``noisy``: the expert with Gaussian noise on its actions (it strays, and is corrected);
 * ``pause``: the expert with one stretch of zero actions mid-sequence (the block off the target and
   nobody pushing it: the one place a zero action meets a block that must stay where it is);
-* ``random``: a random walk of the pusher (smooth random actions, no expert at all).
+* ``random``: a random walk of the pusher (smooth random actions, no expert at all);
+* ``poke``: the same random walk, from a start beside the block, its first step a push into it:
+  contacts in every direction, where the expert's pushes all head for the target (so in its data a
+  block that moves moves toward the target, whatever pushed it).
 
 With none of them (the chapter's default) the data is exactly the expert's, bit for bit.
 """
@@ -26,8 +29,9 @@ import numpy as np
 import torch
 
 from .config import MIX_STRIDE
-from .env import ACT_DIM, OBS_DIM, PushTEnv
-from .expert import ScriptedExpert
+from .env import (ACT_DIM, ARENA_HALF, OBS_DIM, PUSHER_RADIUS, WALL_RADIUS, PushTEnv, distance_to_tee,
+                  sample_start)
+from .expert import ScriptedExpert, contact_table
 from .stage_cache import cached_file, source_hash
 
 # Disjoint seed ranges: a start used for training can never be an evaluation start.
@@ -39,7 +43,7 @@ LOOP_SEED_BASE = 3_000_000_000     # + run_seed * 100_000 + i: starts of the rea
 # The richer data's kinds, in the order their sequences follow the expert's (``ExpertData.train_kind``
 # holds each training sequence's index into KINDS). Kind k's starts are the training range's
 # k * MIX_STRIDE + i, disjoint from the expert's (i < MIX_STRIDE) and from validation (500_000 on).
-KINDS = ("expert", "noisy", "pause", "random")
+KINDS = ("expert", "noisy", "pause", "random", "poke")
 RANDOM_WALK_KEEP, RANDOM_WALK_STEP = 0.7, 0.6   # a_t = clip(0.7 a_{t-1} + 0.6 N(0, 1)): a smooth random walk
 
 
@@ -58,15 +62,17 @@ class DataMix:
     pause: int = 0
     random: int = 0
     noise: float = 0.3
+    poke: int = 0
 
     @classmethod
     def of(cls, cfg) -> "DataMix":
         """The mix a ``Config`` asks for (its ``data_*`` fields)."""
-        return cls(cfg.data_noisy_episodes, cfg.data_pause_episodes, cfg.data_random_episodes, cfg.data_noise)
+        return cls(cfg.data_noisy_episodes, cfg.data_pause_episodes, cfg.data_random_episodes, cfg.data_noise,
+                   cfg.data_poke_episodes)
 
     @property
     def counts(self) -> dict[str, int]:
-        return {"noisy": self.noisy, "pause": self.pause, "random": self.random}
+        return {"noisy": self.noisy, "pause": self.pause, "random": self.random, "poke": self.poke}
 
     @property
     def empty(self) -> bool:
@@ -77,7 +83,8 @@ class DataMix:
         if self.empty:
             return ""
         noise = f"_sd{self.noise!r}" if self.noisy else ""
-        return f"_mix{self.noisy}-{self.pause}-{self.random}{noise}"
+        poke = f"-{self.poke}" if self.poke else ""
+        return f"_mix{self.noisy}-{self.pause}-{self.random}{poke}{noise}"
 
 
 def _actor(kind: str, seeds, seq_len: int, noise: float):
@@ -102,7 +109,10 @@ def _actor(kind: str, seeds, seq_len: int, noise: float):
             a[(start <= t) & (t < start + length)] = 0.0
             return a
         return pause
-    prev = np.array([r.uniform(-1.0, 1.0, ACT_DIM) for r in rngs])   # "random": a smooth random walk
+    if kind == "poke":    # the first step pushes into the block, along a contact's normal (see poke_start)
+        prev = np.array([r.uniform(0.3, 1.0) * n for r, n in zip(rngs, _poke_normals(seeds))])
+    else:                 # "random": a smooth random walk from a random first action
+        prev = np.array([r.uniform(-1.0, 1.0, ACT_DIM) for r in rngs])
 
     def walk(t, obs):
         nonlocal prev
@@ -111,6 +121,27 @@ def _actor(kind: str, seeds, seq_len: int, noise: float):
             prev = np.clip(RANDOM_WALK_KEEP * prev + RANDOM_WALK_STEP * step, -1.0, 1.0)
         return prev.copy()
     return walk
+
+
+def poke_start(seed: int):
+    """A ``poke`` sequence's start: a random start's T pose (``env.sample_start``) with the pusher
+    moved beside a random contact of its outline (``expert.contact_table``), its rim 2-20 mm away.
+    Returns ``(state for env.reset, world-frame inward normal of that contact)``."""
+    rng = np.random.default_rng([KINDS.index("poke"), seed, 1])
+    _, tee = sample_start(rng)
+    points, normals = contact_table()
+    c, s = np.cos(tee[2]), np.sin(tee[2])
+    rot = np.array([[c, -s], [s, c]])
+    limit = ARENA_HALF - WALL_RADIUS - PUSHER_RADIUS
+    while True:
+        j = rng.integers(len(points))
+        pusher = tee[:2] + rot @ (points[j] - normals[j] * (PUSHER_RADIUS + rng.uniform(0.002, 0.02)))
+        if np.all(np.abs(pusher) < limit) and distance_to_tee(pusher, tee) > PUSHER_RADIUS:
+            return np.concatenate([pusher, tee]), rot @ normals[j]
+
+
+def _poke_normals(seeds):
+    return [poke_start(s)[1] for s in seeds]
 
 
 def collect_sequences(seeds, seq_len: int, kind: str = "expert", noise: float = 0.0):
@@ -125,7 +156,10 @@ def collect_sequences(seeds, seq_len: int, kind: str = "expert", noise: float = 
     envs = [PushTEnv() for _ in seeds]
     obs = np.zeros((len(seeds), seq_len + 1, OBS_DIM))
     act = np.zeros((len(seeds), seq_len, ACT_DIM))
-    obs[:, 0] = [env.reset(s) for env, s in zip(envs, seeds)]
+    if kind == "poke":
+        obs[:, 0] = [env.reset(state=poke_start(s)[0]) for env, s in zip(envs, seeds)]
+    else:
+        obs[:, 0] = [env.reset(s) for env, s in zip(envs, seeds)]
     actor = _actor(kind, seeds, seq_len, noise)
     live = np.ones(len(seeds), dtype=bool)
     for t in range(seq_len):

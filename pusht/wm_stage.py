@@ -27,7 +27,7 @@ from .world_model import WorldModel, prediction_error_vs_copy_last, train_world_
 WM_FIELDS = ("seed", "device", "threads", "n_episodes", "seq_len", "n_val_episodes", "latent_dim",
              "hidden_dim", "embed_dim", "wm_epochs", "wm_lr", "batch_size", "context", "wm_predicts",
              "ensemble_size", "data_noisy_episodes", "data_pause_episodes", "data_random_episodes",
-             "data_noise")
+             "data_noise", "data_poke_episodes")
 
 
 @dataclass

@@ -12,7 +12,9 @@ import torch
 
 from pusht.cli import parse_config
 from pusht.config import make_config
-from pusht.data import EVAL_SEED_BASE, KINDS, DataMix, load_expert_data, start_seeds
+from pusht.config import MIX_STRIDE
+from pusht.data import EVAL_SEED_BASE, KINDS, TRAIN_SEED_BASE, VAL_SEED_BASE, DataMix, load_expert_data, start_seeds
+from pusht.env import PUSHER_RADIUS, distance_to_tee, obs_to_pose
 from pusht.gate import gate, verdict
 from pusht.nb.stats import wilson
 from pusht.plan import PlanSettings, cem_update, knot_index, plan_rollout
@@ -40,10 +42,12 @@ def test_the_default_config_leaves_the_expert_data_as_it_was():
 
 def test_each_kind_follows_the_expert_data_and_leaves_it_alone():
     plain = load_expert_data(3, 5, 2, 12, None)
-    mixed = load_expert_data(3, 5, 2, 12, None, DataMix(noisy=4, pause=4, random=4, noise=0.5))
+    mix = DataMix(noisy=4, pause=4, random=4, noise=0.5, poke=4)
+    mixed = load_expert_data(3, 5, 2, 12, None, mix)
     np.testing.assert_array_equal(mixed.train_obs[:5], plain.train_obs)
     np.testing.assert_array_equal(mixed.val_obs, plain.val_obs)              # validation: the expert's alone
-    assert mixed.train_kind.tolist() == [0] * 5 + [1] * 4 + [2] * 4 + [3] * 4
+    assert mixed.train_kind.tolist() == [0] * 5 + [1] * 4 + [2] * 4 + [3] * 4 + [4] * 4
+    assert len(KINDS) * MIX_STRIDE <= VAL_SEED_BASE - TRAIN_SEED_BASE        # every kind's starts are its own
     act, obs = mixed.train_act, mixed.train_obs
     for i in np.flatnonzero(mixed.train_kind == KINDS.index("pause")):
         paused = np.flatnonzero(np.abs(act[i]).sum(-1) == 0)
@@ -52,7 +56,12 @@ def test_each_kind_follows_the_expert_data_and_leaves_it_alone():
         assert np.abs(block - block[0]).max() < 0.01                         # nobody pushes: it stays put
     walk = act[mixed.train_kind == KINDS.index("random")]
     assert np.abs(walk).max() <= 1 and (np.abs(walk).sum(-1) > 0).all()
-    again = load_expert_data(3, 5, 2, 12, None, DataMix(noisy=4, pause=4, random=4, noise=0.5))
+    poke = mixed.train_kind == KINDS.index("poke")
+    gap = distance_to_tee(obs[poke, 0, :2], obs_to_pose(obs[poke, 0])[1]) - PUSHER_RADIUS
+    assert (gap > 0).all() and (gap < 0.025).all()                           # it starts beside the block
+    moved = np.linalg.norm(obs[poke, -1, 2:4] - obs[poke, 0, 2:4], axis=-1)
+    assert (moved > 0.005).any()                                             # ... and pushes it
+    again = load_expert_data(3, 5, 2, 12, None, mix)
     np.testing.assert_array_equal(again.train_act, mixed.train_act)
 
 
@@ -60,6 +69,7 @@ def test_each_kind_follows_the_expert_data_and_leaves_it_alone():
     (dict(data_noise=-0.1), "data_noise must be in [0, 2]"),
     (dict(data_pause_episodes=-1), "data_pause_episodes must be a whole number from 0 to 100000"),
     (dict(data_random_episodes=200_000), "data_random_episodes must be a whole number from 0 to 100000"),
+    (dict(data_poke_episodes=-2), "data_poke_episodes must be a whole number from 0 to 100000"),
     (dict(data_noisy_episodes=1.5), "data_noisy_episodes must be a whole number"),
     (dict(data_noisy_episodes=5, data_noise=0.0), "needs a data_noise above 0"),
 ])
@@ -77,8 +87,8 @@ def test_the_data_options_are_flags_and_part_of_both_cache_keys(tmp_path):
     base = make_config(smoke=True)
     keys = {stage_path(tmp_path, "wm", base.replace(**c), WM_FIELDS, "pusht.wm_stage")
             for c in ({}, {"data_pause_episodes": 5}, {"data_random_episodes": 5}, {"data_noisy_episodes": 5},
-                      {"data_noisy_episodes": 5, "data_noise": 0.1})}
-    assert len(keys) == 5
+                      {"data_noisy_episodes": 5, "data_noise": 0.1}, {"data_poke_episodes": 5})}
+    assert len(keys) == 6
     load_expert_data(1, 3, 1, 4, tmp_path)
     load_expert_data(1, 3, 1, 4, tmp_path, DataMix(pause=2))
     assert len(list(tmp_path.glob("expert_*.npz"))) == 2
