@@ -32,8 +32,8 @@ from pusht.plan import RECIPE, PlanSettings, run
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_CSV = ROOT / "benchmarks" / "plan_seeds.csv"
-MODEL_FIELDS = ("wm_predicts", "hidden_dim", "data_noisy_episodes", "data_pause_episodes", "data_random_episodes",
-                "data_noise", "n_episodes", "wm_epochs")
+MODEL_FIELDS = ("wm_predicts", "hidden_dim", "latent_dim", "data_noisy_episodes", "data_pause_episodes",
+                "data_random_episodes", "data_poke_episodes", "data_noise", "n_episodes", "wm_epochs")
 
 
 def row(res: dict, host: str, commit: str, load: float) -> dict:
