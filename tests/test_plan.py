@@ -17,7 +17,7 @@ from pusht.data import EVAL_SEED_BASE, KINDS, TRAIN_SEED_BASE, VAL_SEED_BASE, Da
 from pusht.env import PUSHER_RADIUS, distance_to_tee, obs_to_pose
 from pusht.gate import gate, verdict
 from pusht.nb.stats import wilson
-from pusht.plan import PlanSettings, cem_update, knot_index, plan_rollout
+from pusht.plan import RECIPE, SMOKE_PLAN, SMOKE_RECIPE, PlanSettings, cem_update, knot_index, plan_rollout
 from pusht.stage_cache import stage_path
 from pusht.wm_stage import WM_FIELDS
 from pusht.world_model import WorldModel
@@ -147,6 +147,13 @@ def test_batched_planning_gives_the_actions_of_one_start_at_a_time(tiny_model, w
     np.testing.assert_allclose(batched.actions, serial.actions, atol=1e-5)
     alone = plan_rollout(wm, seeds[1:2], 4, mean, std, s)                     # a start alone, as in a batch
     np.testing.assert_allclose(alone.actions[:, 0], batched.actions[:, 1], atol=1e-5)
+
+
+def test_the_recipe_and_its_smoke_are_valid_configs():
+    for recipe, smoke in ((RECIPE, False), (SMOKE_RECIPE, True)):
+        cfg = make_config(smoke=smoke, **recipe)
+        assert cfg.wm_predicts == "delta" and not DataMix.of(cfg).empty
+    PlanSettings(**SMOKE_PLAN).validate()
 
 
 @pytest.mark.parametrize("change, message", [
