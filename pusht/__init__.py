@@ -4,7 +4,9 @@ One module per idea. The world: ``env`` (PushT on pymunk), ``expert``, ``data``.
 ``world_model``, ``reward``, ``agent``, ``imagination`` (learning inside the frozen dream), ``optim``.
 The two stages and their cache: ``wm_stage``, ``agent_stage``, ``stage_cache``. The measuring:
 ``evaluate`` (the same policy in two worlds), ``split`` (the gap taken apart), ``analysis``
-(distribution shift), ``metric_keys`` (where each metric's key is born). The conductors: ``dreamer`` (the pipeline), ``loop`` (the real-data loop),
+(distribution shift), ``metric_keys`` (where each metric's key is born), ``gate`` (can the dream be
+trusted to act in?). Acting without an actor: ``plan`` (CEM in the frozen model). The conductors:
+``dreamer`` (the pipeline), ``loop`` (the real-data loop),
 ``sweep`` (runs side by side), ``cli``. The rest: ``config``, ``predict``, ``exercise``,
 ``selfcheck``, ``draw``, ``record`` (the optional Rerun recording), ``page``, ``host``, ``fingerprint``,
 ``runtime``; ``reference`` and ``grading`` (what the learner shares with the grader); ``nb`` (the

@@ -46,15 +46,18 @@ def build_parser(prog: str = "python -m pusht.dreamer", description: str = DESCR
     return p
 
 
-def parse_config(argv=None, prog: str = "python -m pusht.dreamer"):
-    parser = build_parser(prog)
+def parse_config(argv=None, prog: str = "python -m pusht.dreamer", parser=None, base=None):
+    """The config the flags ask for, and the parsed arguments. ``parser``: one made by
+    :func:`build_parser` with a command's own flags added; ``base(smoke) -> dict``: that command's
+    own defaults for some config fields (``pusht.plan``'s recipe), under the flags the user gave."""
+    parser = parser or build_parser(prog)
     args = parser.parse_args(argv)
     given = {f.name: getattr(args, f.name) for f in fields(Config)
              if f.name != "smoke" and getattr(args, f.name) is not None}
     if "out" not in given and "seed" in given:
         given["out"] = Path(f"runs/seed{given['seed']}")      # each seed gets its own folder
     try:
-        cfg = make_config(smoke=args.smoke, **given)
+        cfg = make_config(smoke=args.smoke, **{**(base(args.smoke) if base else {}), **given})
     except ValueError as e:
         parser.error(str(e).splitlines()[0])
     if args.rerun and not rerun_available():     # say so now, not after the whole run

@@ -11,6 +11,9 @@ import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
+# Sequences per kind of training data at most (data.MIX_STRIDE: each kind's starts are its own range).
+MIX_STRIDE = 100_000
+
 
 @dataclass
 class Config:
@@ -33,6 +36,20 @@ class Config:
     travelling to the block and the first pushes, which is why the model learns the pusher best."""
     n_val_episodes: int = 60
     """Held-out expert sequences for the model-versus-copy-last measurement."""
+    # Notebook 07's richer data (data.DataMix): extra training sequences after the expert's, each
+    # kind from its own starts. All zero (the chapter's default): the expert's data, bit for bit.
+    data_noisy_episodes: int = 0
+    """Extra training sequences of the expert with Gaussian noise (std data_noise) on its actions."""
+    data_pause_episodes: int = 0
+    """Extra training sequences of the expert with one pause mid-sequence: zero actions for a quarter
+    to half of it, the block off the target and nobody pushing it."""
+    data_random_episodes: int = 0
+    """Extra training sequences of a random walk of the pusher (smooth random actions, no expert)."""
+    data_noise: float = 0.3
+    """Std of the noisy expert's action noise (actions live in [-1, 1]); read only with data_noisy_episodes."""
+    data_poke_episodes: int = 0
+    """Extra training sequences of the random walk from beside the block, its first step a push into it
+    (contacts in every direction: the expert's pushes all head for the target)."""
 
     # --- world model (3.1's, deterministic latent) -----------------------------------------------
     latent_dim: int = 16
@@ -124,6 +141,18 @@ class Config:
         for name in ["wm_epochs", "context", "actor_seed"]:
             if getattr(self, name) < 0:
                 raise ValueError(f"{name} must be 0 or more, got {getattr(self, name)}")
+        for name in ["n_episodes", "data_noisy_episodes", "data_pause_episodes", "data_random_episodes",
+                     "data_poke_episodes"]:
+            v = getattr(self, name)
+            if not isinstance(v, int) or isinstance(v, bool) or not 0 <= v <= MIX_STRIDE:
+                raise ValueError(f"{name} must be a whole number from 0 to {MIX_STRIDE} (each kind of "
+                                 f"training sequence has that many starts of its own), got {v!r}")
+        if not 0 <= self.data_noise <= 2:
+            raise ValueError(f"data_noise must be in [0, 2] (the std of noise on actions in [-1, 1]), "
+                             f"got {self.data_noise}")
+        if self.data_noisy_episodes and self.data_noise == 0:
+            raise ValueError(f"data_noisy_episodes ({self.data_noisy_episodes}) needs a data_noise above 0: "
+                             f"without noise they are more expert sequences (raise n_episodes instead)")
         for name in ["wm_lr", "actor_lr"]:
             v = getattr(self, name)
             if not (v > 0 and v < 1):

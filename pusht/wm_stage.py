@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import torch
 
 from .config import Config
-from .data import load_expert_data
+from .data import DataMix, load_expert_data
 from .ensemble import EnsembleWorldModel, ensemble_history
 from .env import ACT_DIM, OBS_DIM
 from .imagination import freeze
@@ -26,7 +26,8 @@ from .world_model import WorldModel, prediction_error_vs_copy_last, train_world_
 # The config fields the stage reads: with this module's source, the key of its cache file.
 WM_FIELDS = ("seed", "device", "threads", "n_episodes", "seq_len", "n_val_episodes", "latent_dim",
              "hidden_dim", "embed_dim", "wm_epochs", "wm_lr", "batch_size", "context", "wm_predicts",
-             "ensemble_size")
+             "ensemble_size", "data_noisy_episodes", "data_pause_episodes", "data_random_episodes",
+             "data_noise", "data_poke_episodes")
 
 
 @dataclass
@@ -61,7 +62,8 @@ def world_model_stage(cfg: Config, cache_dir=None, model_cache=None, log=print,
     def build():
         t0 = time.perf_counter()
         torch.set_num_threads(cfg.threads)
-        data = load_expert_data(cfg.seed, cfg.n_episodes, cfg.n_val_episodes, cfg.seq_len, cache_dir)
+        data = load_expert_data(cfg.seed, cfg.n_episodes, cfg.n_val_episodes, cfg.seq_len, cache_dir,
+                                DataMix.of(cfg))
         T = data.torch(cfg.device)
         data_seconds = time.perf_counter() - t0
         members, hists = [], []

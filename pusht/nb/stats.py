@@ -217,3 +217,18 @@ def count_rise_p(before: int, after: int, n: int) -> float:
     denom = math.comb(2 * n, n)
     return float(sum(math.comb(total, x) * math.comb(2 * n - total, n - x)
                      for x in range(after, min(total, n) + 1)) / denom)
+
+
+def wilson(k: int, n: int, level: float = LEVEL) -> tuple[float, float]:
+    """The Wilson score interval of a success rate, ``k`` successes in ``n`` trials, two-sided ``level``:
+    ``(low, high)`` as fractions. Unlike k/n +- 1.96 se, it stays inside [0, 1] and is not zero-wide at
+    0 or n successes (0 of 30 gives 0-11%, 10 of 30 gives 19-51%)."""
+    if not 0 <= k <= n or n < 1:
+        raise ValueError(f"need 0 <= k <= n and n >= 1, got k={k}, n={n}")
+    from statistics import NormalDist
+
+    z = NormalDist().inv_cdf(0.5 + level / 2)
+    p, z2 = k / n, z * z
+    centre = (p + z2 / (2 * n)) / (1 + z2 / n)
+    half = z * math.sqrt(p * (1 - p) / n + z2 / (4 * n * n)) / (1 + z2 / n)
+    return max(0.0, centre - half), min(1.0, centre + half)
