@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from .evaluate import dream_rollout, expert_rollout, real_rollout, replay_rollout, zero_policy
+from .metric_keys import EXPERT_SIGNAL, key
 from .nb.stats import MIN_REWARD_EFFECT, beyond, k_for
 from .split import expert_signal
 
@@ -37,7 +38,7 @@ def verdict(signal: dict, n_starts: int) -> dict:
     k = k_for(n_starts)
     out = {"k": k, "min_effect": MIN_REWARD_EFFECT}
     for world in ("dream", "real"):
-        d, se = signal[f"expert_signal_{world}"], signal[f"expert_signal_{world}_se"]
+        d, se = signal[key(EXPERT_SIGNAL, world=world)], signal[key(EXPERT_SIGNAL, world=world, se=True)]
         out[f"{world}_ranks_expert_first"] = bool(beyond(d, se, k, MIN_REWARD_EFFECT, sign=+1))
     out["passed"] = out["dream_ranks_expert_first"]
     return out
@@ -64,11 +65,11 @@ def gate(wm, seeds, horizon: int, mean, std) -> dict:
 
 def gate_line(g: dict) -> str:
     """One line for a terminal: both worlds' signals with their standard errors, and the verdict."""
-    def pm(key):
-        return f"{g[key]:+.3f} ± {g[key + '_se']:.3f}"
+    def pm(world):
+        return f"{g[key(EXPERT_SIGNAL, world=world)]:+.3f} ± {g[key(EXPERT_SIGNAL, world=world, se=True)]:.3f}"
     word = "PASSES" if g["passed"] else "FAILS"
     return (f"gate ({g['n_starts']} starts, {g['horizon']} steps): expert minus zero actions, reward/step: "
-            f"dream {pm('expert_signal_dream')}, reality {pm('expert_signal_real')}; untouched block moved "
+            f"dream {pm('dream')}, reality {pm('real')}; untouched block moved "
             f"{100 * g['zero_dream_block_moved']:.1f} cm in the dream -> {word} "
             f"(needs > {g['k']:.2f} se and >= {g['min_effect']:.2f})")
 
