@@ -10,7 +10,7 @@ Wilson 95% interval, reward per step with standard errors, final distance and ya
 time of every stage; with ``--serial N``, batched planning against one start at a time on the
 first N starts, side by side. One CSV row per seed (the host, the commit and the machine's load
 recorded with it) and the whole result, per start included, as JSON beside the CSV
-(``<csv stem>/seed<N>_<settings>.json``). Rows are appended, never rewritten. Torch runs on one thread.
+(``<csv stem>/seed<N>_<settings>_m<model_tag>.json``). Rows are appended, never rewritten. Torch runs on one thread.
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import csv
 import dataclasses
+import hashlib
 import json
 import os
 import time
@@ -68,6 +69,11 @@ def row(res: dict, host: str, commit: str, load: float) -> dict:
     return out
 
 
+def model_tag(model: str) -> str:
+    """Eight hex digits naming a row's model fields (its "model" column), for the JSON's file name."""
+    return hashlib.sha256(model.encode()).hexdigest()[:8]
+
+
 def append(path: Path, rec: dict) -> None:
     """Append ``rec``; a file whose header differs is kept and a new file beside it is started."""
     if path.exists():
@@ -113,7 +119,8 @@ def main(argv=None) -> int:
                   serial=args.serial, serial_steps=args.serial_steps, chapter_gate=True)
         rec = row(res, host, commit, load)
         append(args.csv, rec)
-        tag = f"h{s.horizon}k{s.knots}n{s.samples}i{s.iters}e{s.elites}" + ("" if s.warm else "-cold")
+        tag = f"h{s.horizon}k{s.knots}n{s.samples}i{s.iters}e{s.elites}" + ("" if s.warm else "-cold") + \
+            (f"w{s.window}" if s.window else "") + f"_m{model_tag(rec['model'])}"
         js = args.csv.parent / args.csv.stem / f"seed{seed}_{tag}.json"
         js.parent.mkdir(parents=True, exist_ok=True)
         js.write_text(json.dumps({"host": host, "commit": commit, **res}, indent=1, default=str) + "\n")
