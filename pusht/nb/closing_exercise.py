@@ -10,7 +10,7 @@ from ..env import SUCCESS_POS
 from .closing_changes import COUNT_P, _steps, gap_change, success_rose, successes
 from .closing_claims import count_beyond_chance, drift_crossed_zero, ex3_letter_decided
 from .closing_words import (_change_words, _halves, _ratio_words, _side_words, _sign_change_words,
-                            path_words, policy_specific_words, reopen_words, sides)
+                            path_words, policy_specific_words, reality_vs_zero_words, reopen_words, sides)
 from .fmt import num, pm
 from .prose import note, options
 from .stats import MIN_REWARD_EFFECT, count_rise_p, margin_words
@@ -117,5 +117,6 @@ def reconcile_text(rounds: list) -> str:
     else:
         succ += f"Real success did not rise: round 0 already had {s0}/{n}, and the last round has no more."
     lines.append(succ)
+    lines.append(reality_vs_zero_words(rounds, cl["shrank"]))
     lines.append(f"So the measured answer is ({ex3_verdict(rounds)}).")
     return "\n".join(lines)
