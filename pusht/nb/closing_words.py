@@ -18,7 +18,7 @@ from .closing_claims import (EXPERT_CONTROL, change_down, change_up, count_beyon
                              dream_fell_for_the_policy, dream_gloomier, dream_penalises_expert,
                              dream_rewards_expert, dream_rosier, gap_reopened, halves_cancel,
                              model_better_on_policy, model_worse_somewhere, position_half_clearly_larger,
-                             real_below_zero_action, yaw_half_clearly_larger)
+                             yaw_half_clearly_larger)
 from .fmt import mm, num, pm
 from .gap_expert import expert_control_words
 from .stats import MIN_REWARD_EFFECT, count_rise_p, k_for
@@ -262,33 +262,6 @@ def reopen_words(rounds: list, span: str = "eval_horizon") -> str:
         return f"Its size was smallest in the last round ({sizes[i]:.3f})."
     return (f"Its size was smallest in round {r_min} ({sizes[i]:.3f}); the last round's {sizes[-1]:.3f} is not "
             "larger beyond the noise and the minimum effect.")
-
-
-def reality_vs_zero_words(rounds: list, shrank: bool, span: str = "eval_horizon") -> str:
-    """Did the loop make the policy worse in reality than doing nothing? Each round's real reward per
-    step against zero actions' from the same starts (claim ``06.real_below_zero_action``; zero actions
-    in the real sim are the same in every round). A gap that narrowed while reality fell below zero
-    actions narrowed because the dream grew gloomier, not because the policy improved."""
-    k = k_for(int(rounds[-1]["eval_episodes"]))
-    at = dict(world="real", span=span)
-    below = [m["round"] for m in rounds if real_below_zero_action(
-        policy=m[key(RETURN, policy="trained", **at)], policy_se=m[key(RETURN, policy="trained", se=True, **at)],
-        zero=m[key(RETURN, policy="zero", **at)], zero_se=m[key(RETURN, policy="zero", se=True, **at)],
-        k=k, min_effect=MIN_REWARD_EFFECT)]
-    last = rounds[-1]
-    pol, zero = last[key(RETURN, policy="trained", **at)], last[key(RETURN, policy="zero", **at)]
-    nums = (f"after round {last['round']} the policy earns {pol:+.3f} per step in reality, a pusher that never "
-            f"moves {zero:+.3f} from the same starts")
-    if not below:
-        return (f"Against doing nothing: in no round did the policy earn less in reality than a pusher that never "
-                f"moves, beyond the noise and the minimum effect ({nums}).")
-    which = ("round " if len(below) == 1 else "rounds ") + ", ".join(str(r) for r in below)
-    s = (f"Against doing nothing: in {which} the policy earned less in reality than a pusher that never moves, "
-         f"beyond the noise and the minimum effect ({nums}).")
-    if shrank and below[-1] == last["round"]:
-        s += (" So the gap narrowed while, in reality, the policy ended worse than standing still: a narrower gap "
-              "here does not mean a better policy.")
-    return s
 
 
 def policy_specific_words(a: dict, b: dict, sd: dict) -> str:
