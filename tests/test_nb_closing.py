@@ -78,6 +78,9 @@ def metrics(dream=-0.215, real=-0.400, se=0.020, dream_tr=-0.285, real_tr=-0.400
     for span in ("train_horizon", "eval_horizon"):
         m.setdefault(f"trained_dream_return_per_step_se_{span}", m[f"imagination_gap_se_{span}"])
         m.setdefault(f"trained_real_return_per_step_se_{span}", 0.003)
+        # zero actions in the real sim: the same starts, the same rating in every round
+        m.setdefault(f"zero_real_return_per_step_{span}", -0.400)
+        m.setdefault(f"zero_real_return_per_step_se_{span}", 0.003)
     # the zero-action control: reality's zero-action rating is the same in every run (the same starts), the
     # dream's is that plus the drift
     m.setdefault("zero_action_dream_return_per_step", -0.45 + m["gap_drift_eval_horizon"])
@@ -226,6 +229,23 @@ def test_the_reconciliation_says_from_which_side_the_gap_moved():
     assert "smallest in round 1" in wobble and "not larger beyond the noise" in wobble
     many = nb06.reconcile_text(loop([-0.215, -0.387], successes=[0, 9]))
     assert "beyond chance" in many and "answer is (b)" not in many
+
+
+def test_a_gap_that_narrows_while_reality_falls_below_doing_nothing_is_called_so():
+    # the gap shrinks from +0.185 to +0.040 while what reality pays the policy falls below zero actions' -0.400
+    worse = nb06.reconcile_text(loop([-0.215, -0.380, -0.400], reals=[-0.400, -0.425, -0.440]))
+    assert "The gap shrank" in worse and "in rounds 1, 2 the policy earned less in reality than a pusher" in worse
+    assert "worse than standing still" in worse and "does not mean a better policy" in worse
+    # the same shrink with reality level with doing nothing: no such sentence
+    level = nb06.reconcile_text(loop([-0.215, -0.380, -0.387], reals=[-0.400, -0.400, -0.401]))
+    assert "The gap shrank" in level and "in no round did the policy earn less in reality" in level
+    assert "worse than standing still" not in level
+    # below doing nothing by less than the minimum effect, or within the noise, does not count
+    close = nb06.reconcile_text(loop([-0.215, -0.395], reals=[-0.400, -0.410]))
+    assert "in no round" in close
+    # below in an early round only: said, but the gap's narrowing is not blamed on it
+    early = nb06.reconcile_text(loop([-0.215, -0.420, -0.387], reals=[-0.400, -0.450, -0.400]))
+    assert "in round 1 the policy earned less" in early and "worse than standing still" not in early
 
 
 def test_the_table_has_a_row_per_round_with_its_numbers():
@@ -604,6 +624,7 @@ def test_every_claim_takes_both_branches_somewhere():
               for r in range(3)]
     cases.append(loop([-0.2, -0.3, -0.35], errors=better))
     cases.append(loop([-0.215, -0.273]))        # a drop of 0.058, about k = 2.05 standard errors: a thin margin
+    cases.append(loop([-0.215, -0.380, -0.400], reals=[-0.400, -0.425, -0.440]))   # reality below doing nothing
     for rounds in cases:
         nb06.ex3_verdict(rounds)
         nb06.ex3_reconciliation(rounds)

@@ -33,6 +33,13 @@ def _size_rose(first, first_se, last, last_se, k, min_effect) -> bool:
     return beyond(rise, se, k, min_effect, +1)
 
 
+@claim("06.real_below_zero_action", "the policy earns less per step in reality than a pusher that never moves, from "
+       "the same starts, beyond k standard errors (the two per-start standard errors in quadrature, which is "
+       "conservative) and by at least the minimum effect", control="zero actions")
+def real_below_zero_action(*, policy, policy_se, zero, zero_se, k, min_effect):
+    return beyond(policy - zero, math.hypot(policy_se, zero_se), k, min_effect, -1)
+
+
 @claim("06.gap_shrank", "the gap's size fell by more than k standard errors of the change and by at least the "
        "minimum effect, without ending on the other side of zero", control="round 0")
 def gap_shrank(*, first, first_se, last, last_se, k, min_effect):

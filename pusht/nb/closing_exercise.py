@@ -7,13 +7,14 @@ from __future__ import annotations
 import math
 
 from ..env import SUCCESS_POS
+from ..metric_keys import RETURN, key
 from .closing_changes import COUNT_P, _steps, gap_change, success_rose, successes
-from .closing_claims import count_beyond_chance, drift_crossed_zero, ex3_letter_decided
+from .closing_claims import count_beyond_chance, drift_crossed_zero, ex3_letter_decided, real_below_zero_action
 from .closing_words import (_change_words, _halves, _ratio_words, _side_words, _sign_change_words,
                             path_words, policy_specific_words, reopen_words, sides)
 from .fmt import num, pm
 from .prose import note, options
-from .stats import MIN_REWARD_EFFECT, count_rise_p, margin_words
+from .stats import MIN_REWARD_EFFECT, count_rise_p, k_for, margin_words
 
 
 # --- Exercise 3 ---------------------------------------------------------------------------------
@@ -117,5 +118,33 @@ def reconcile_text(rounds: list) -> str:
     else:
         succ += f"Real success did not rise: round 0 already had {s0}/{n}, and the last round has no more."
     lines.append(succ)
+    lines.append(reality_vs_zero_words(rounds, cl["shrank"]))
     lines.append(f"So the measured answer is ({ex3_verdict(rounds)}).")
     return "\n".join(lines)
+
+
+def reality_vs_zero_words(rounds: list, shrank: bool, span: str = "eval_horizon") -> str:
+    """Did the loop make the policy worse in reality than doing nothing? Each round's real reward per
+    step against zero actions' from the same starts (claim ``06.real_below_zero_action``; zero actions
+    in the real sim are the same in every round). A gap that narrowed while reality fell below zero
+    actions narrowed because the dream grew gloomier, not because the policy improved."""
+    k = k_for(int(rounds[-1]["eval_episodes"]))
+    at = dict(world="real", span=span)
+    below = [m["round"] for m in rounds if real_below_zero_action(
+        policy=m[key(RETURN, policy="trained", **at)], policy_se=m[key(RETURN, policy="trained", se=True, **at)],
+        zero=m[key(RETURN, policy="zero", **at)], zero_se=m[key(RETURN, policy="zero", se=True, **at)],
+        k=k, min_effect=MIN_REWARD_EFFECT)]
+    last = rounds[-1]
+    pol, zero = last[key(RETURN, policy="trained", **at)], last[key(RETURN, policy="zero", **at)]
+    nums = (f"after round {last['round']} the policy earns {pol:+.3f} per step in reality, a pusher that never "
+            f"moves {zero:+.3f} from the same starts")
+    if not below:
+        return (f"Against doing nothing: in no round did the policy earn less in reality than a pusher that never "
+                f"moves, beyond the noise and the minimum effect ({nums}).")
+    which = ("round " if len(below) == 1 else "rounds ") + ", ".join(str(r) for r in below)
+    s = (f"Against doing nothing: in {which} the policy earned less in reality than a pusher that never moves, "
+         f"beyond the noise and the minimum effect ({nums}).")
+    if shrank and below[-1] == last["round"]:
+        s += (" So the gap narrowed while, in reality, the policy ended worse than standing still: a narrower gap "
+              "here does not mean a better policy.")
+    return s
