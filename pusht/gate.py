@@ -6,7 +6,7 @@ still; a dream that can be planned in must rank them the same way. The quantity 
 expert signal (``split.expert_signal``: the expert minus zero actions, reward per step, each start's
 difference averaged, with its standard error over the starts), in the dream and in reality.
 
-The verdict uses the notebooks' one test (``pusht.nb.stats.beyond``): the dream's signal passes when
+The verdict uses the notebooks' one test (``pusht.stats.beyond``): the dream's signal passes when
 it is positive beyond ``k`` standard errors (Student's t at the starts' degrees of freedom, 95%) AND
 at least the minimum effect that matters (``MIN_REWARD_EFFECT``, 0.02 per step: the block 2 cm
 nearer the target on every step). Nothing is trained; a gate costs one expert rollout, two real
@@ -19,7 +19,7 @@ import numpy as np
 
 from .evaluate import dream_rollout, expert_rollout, real_rollout, replay_rollout, zero_policy
 from .metric_keys import EXPERT_SIGNAL, key
-from .nb.stats import MIN_REWARD_EFFECT, beyond, k_for
+from .stats import MIN_REWARD_EFFECT, beyond, k_for
 from .split import expert_signal
 
 

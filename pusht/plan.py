@@ -49,7 +49,7 @@ from .data import EVAL_SEED_BASE, start_seeds
 from .env import ACT_DIM, PushTEnv
 from .evaluate import Rollout, expert_rollout, real_rollout, zero_policy
 from .gate import as_row, gate, gate_line
-from .nb.stats import beyond, k_for, wilson
+from .stats import MIN_REWARD_EFFECT, beyond, k_for, wilson
 from .reward import reward_from_obs
 from .runtime import labelled
 from .split import se
@@ -228,10 +228,9 @@ def plan_rollout(wm, seeds, horizon: int, mean, std, s: PlanSettings, batched: b
 # --- the measurement -------------------------------------------------------------------------------
 def summarize(rollouts: dict) -> dict:
     """Success k/n with its Wilson 95% interval, reward per step with standard errors, the planner's
-    paired difference from zero actions and from the expert (with the verdict of ``nb.stats.beyond``:
+    paired difference from zero actions and from the expert (with the verdict of ``stats.beyond``:
     beyond k standard errors and at least the minimum effect), final distance and yaw error; for
     ``rollouts`` ``{"plan", "zero", "expert"}`` on the same starts."""
-    from .nb.stats import MIN_REWARD_EFFECT
 
     n = len(rollouts["plan"].success)
     out = {"n_starts": n}

@@ -73,7 +73,7 @@ def gap_split(rollouts: dict, steps: int | None, part: str | None = None, span: 
                                                  - (R["trained", "real"] - R["untrained", "real"]))
     # The noise of each term: the standard error of its mean over the starts (every term is a mean
     # of per-start differences, all on the same starts). Whether a term is told apart from zero,
-    # and whether it is large enough to matter, the notebooks decide (pusht/nb/stats.py).
+    # and whether it is large enough to matter, the notebooks decide (pusht/stats.py).
     P = {(p, w): per_start(rollouts[f"{w}_{p}"], steps, part) for p in POLICIES for w in ("dream", "real")}
     by_start = {"drift": P["zero", "dream"] - P["zero", "real"],
                 "motion": (P["untrained", "dream"] - P["zero", "dream"]) - (P["untrained", "real"] - P["zero", "real"]),

@@ -14,7 +14,7 @@ from pusht.config import make_config
 from pusht.dreamer import run
 from pusht.evaluate import TOUCH_TOL, Rollout
 from pusht.nb import claims, gap
-from pusht.nb.stats import MIN_REWARD_EFFECT
+from pusht.stats import MIN_REWARD_EFFECT
 
 
 @pytest.fixture(scope="module")

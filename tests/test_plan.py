@@ -16,7 +16,7 @@ from pusht.config import MIX_STRIDE
 from pusht.data import EVAL_SEED_BASE, KINDS, TRAIN_SEED_BASE, VAL_SEED_BASE, DataMix, load_expert_data, start_seeds
 from pusht.env import PUSHER_RADIUS, distance_to_tee, obs_to_pose
 from pusht.gate import gate, verdict
-from pusht.nb.stats import wilson
+from pusht.stats import wilson
 from pusht.plan import RECIPE, SMOKE_PLAN, SMOKE_RECIPE, PlanSettings, cem_update, knot_index, plan_rollout
 from pusht.stage_cache import stage_path
 from pusht.wm_stage import WM_FIELDS

@@ -46,7 +46,7 @@ def test_each_notebook_asks_exactly_the_questions_its_file_holds(notebook):
 def test_the_moved_constants_are_loaded_from_the_files_under_their_old_names():
     from pusht.nb import (actor, closing, closing_exercise, gap, gap_exercise, horizon, horizon_exercise,
                           horizon_words, reward, world_model)
-    from pusht.nb.stats import MIN_REWARD_EFFECT
+    from pusht.stats import MIN_REWARD_EFFECT
 
     for module, notebook in [(world_model, "01_world_model"), (reward, "02_reward"), (actor, "03_imagination_actor"),
                              (gap, "04_imagination_gap"), (horizon, "05_horizon"), (closing, "06_closing_the_gap")]:

@@ -158,7 +158,7 @@ def detach_effects(agent, make_batch, loss_fn, gamma: float, lam: float, ent_coe
 
 def rise_test(hist: dict, n: int = 20) -> Test:
     """Last-``n`` minus first-``n`` imagined reward per step of a training history, as a Welch's
-    t-test with the minimum effect :data:`~pusht.nb.stats.MIN_REWARD_EFFECT`.
+    t-test with the minimum effect :data:`~pusht.stats.MIN_REWARD_EFFECT`.
 
     Each update scores a fresh random batch of dreams, so the two windows' spreads measure the
     noise (with 40 updates or more, the standard error is the run's ``imagined_reward_rise_se``).

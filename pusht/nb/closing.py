@@ -20,7 +20,7 @@ why they are what they are):
   test is conservative (it calls fewer changes than the paired test would; the metrics do not keep
   the per-start values that test needs). A change counts beyond ``k`` standard errors, k the
   two-sided 95% point of Student's t at eval_episodes - 1 degrees of freedom
-  (:func:`pusht.nb.stats.t_quantile`: 1.98 for the default 100 starts). A difference that large would turn up
+  (:func:`pusht.stats.t_quantile`: 1.98 for the default 100 starts). A difference that large would turn up
   by chance, in a run that changed nothing, in about one comparison in 20 or fewer. It must also be
   at least the minimum effect that matters, ``stats.MIN_REWARD_EFFECT`` (0.02 reward per step: the
   block held the 2 cm success tolerance nearer the target on every step). A gap **shrank** when its

@@ -5,7 +5,7 @@ same run (``pusht.analysis``: per-start spread over the evaluation starts, or th
 updates' own spread), never a typed-in amount. The multiple is ``k`` = :func:`k_se`, the two-sided
 95% point of Student's t at n - 1 degrees of freedom for n evaluation starts (1.98 for the default 100 starts),
 as in notebooks 05 and 06; a difference is also held to the minimum effect that matters
-(:data:`~pusht.nb.stats.MIN_REWARD_EFFECT`). Each verdict has four outcomes: beyond k standard
+(:data:`~pusht.stats.MIN_REWARD_EFFECT`). Each verdict has four outcomes: beyond k standard
 errors and the minimum effect (a change); beyond k standard errors but smaller than the minimum
 effect ("detected, but smaller than the minimum effect that matters"); and within the noise.
 

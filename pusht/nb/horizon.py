@@ -3,7 +3,7 @@
 Exercise 2 trains several actors at each horizon on ONE frozen world model: ``actor_seed`` 0, 1,
 2, ... differ only in the actor-critic's initial weights and in the random dreams it trains on.
 So the spread of their values at one horizon is what the horizon's effect has to beat. Every
-verdict below asks two things (:mod:`pusht.nb.stats`) and says which test it used:
+verdict below asks two things (:mod:`pusht.stats`) and says which test it used:
 
 * **beyond the noise**: a t-test on the per-seed values (paired by actor seed, for two horizons:
   every horizon trains the same actor seeds, and what a seed adds to both cancels in its difference;

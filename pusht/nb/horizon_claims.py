@@ -250,13 +250,13 @@ def seed_spread_matters(*, largest_range, min_effect):
     return largest_range >= min_effect
 
 
-# --- statistics (pusht/nb/stats.py) -----------------------------------------------------------
+# --- statistics (pusht/stats.py) -----------------------------------------------------------
 def gap_change(short, long, level: float = LEVEL, min_effect: float = MIN_REWARD_EFFECT) -> Test:
     """Did a quantity change from one horizon to another, beyond the spread across actor seeds and
     by at least the minimum effect that matters?
 
     ``short`` and ``long``: its value for each actor seed at the two horizons, in the same seed order; the
-    paired t-test (:func:`pusht.nb.stats.paired`). The outcome is "up" (``long`` is larger), "down" or "same":
+    paired t-test (:func:`pusht.stats.paired`). The outcome is "up" (``long`` is larger), "down" or "same":
     not beyond k standard errors, or smaller than ``min_effect`` (``.detected`` then tells the two
     apart).
     """
