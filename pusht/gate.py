@@ -59,8 +59,14 @@ def gate(wm, seeds, horizon: int, mean, std) -> dict:
     seeds = list(seeds)
     if len(seeds) < 2:
         raise ValueError(f"the gate needs at least 2 starts for a standard error, got {len(seeds)}")
-    signal = expert_signal(gate_rollouts(wm, seeds, horizon, mean, std), None)
-    return {**signal, **verdict(signal, len(seeds)), "n_starts": len(seeds), "horizon": int(horizon)}
+    return read(gate_rollouts(wm, seeds, horizon, mean, std))
+
+
+def read(rollouts: dict) -> dict:
+    """The gate's reading of rollouts already made (:func:`gate_rollouts`), as :func:`gate` returns it."""
+    n, horizon = rollouts["real_expert"].success.shape[0], rollouts["real_expert"].actions.shape[0]
+    signal = expert_signal(rollouts, None)
+    return {**signal, **verdict(signal, n), "n_starts": int(n), "horizon": int(horizon)}
 
 
 def gate_line(g: dict) -> str:

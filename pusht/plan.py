@@ -50,6 +50,7 @@ from .env import ACT_DIM, PushTEnv
 from .evaluate import Rollout, expert_rollout, real_rollout, zero_policy
 from .gate import as_row, gate, gate_line
 from .stats import MIN_REWARD_EFFECT, beyond, k_for, wilson
+from .reference import reference
 from .reward import reward_from_obs
 from .runtime import labelled
 from .split import se
@@ -113,6 +114,21 @@ class PlanSettings:
 
 
 SMOKE_PLAN = dict(horizon=8, knots=2, samples=32, iters=2, elites=4, starts=3)
+# Notebook 07's planner: a quarter of the recipe's samples (benchmarks/plan_sensitivity.csv: 64 samples
+# and 8 elites solved as many starts as 256 on seeds 0-1, in a quarter of the planning time), for a
+# learner's free two-core machine.
+NOTEBOOK_PLAN = dict(samples=64, elites=8)
+
+
+def ladder(smoke: bool = False) -> dict[str, dict]:
+    """The world models of notebook 07, from the chapter's to the recipe's, one change at a time:
+    ``{name: config overrides}``. ``"data"`` is the recipe's data (and its training length) with the
+    chapter's model; ``"data+delta"`` and ``"data+size"`` add one of the recipe's two model changes
+    each (predicting changes; ``hidden_dim``), ``"recipe"`` both: the 2x2 that separates their shares."""
+    recipe = SMOKE_RECIPE if smoke else RECIPE
+    data = {k: v for k, v in recipe.items() if k not in ("wm_predicts", "hidden_dim")}
+    return {"chapter": {}, "data": data, "data+delta": {**data, "wm_predicts": recipe["wm_predicts"]},
+            "data+size": {**data, "hidden_dim": recipe["hidden_dim"]}, "recipe": dict(recipe)}
 
 
 # --- the pieces ------------------------------------------------------------------------------------
@@ -136,6 +152,7 @@ def dream_scores(wm, h, z, obs0, actions, mean, std) -> torch.Tensor:
     return reward.mean(0)
 
 
+@reference("07_planning: cem_update")
 def cem_update(samples: torch.Tensor, scores: torch.Tensor, elites: int, min_std: float = 0.0):
     """The cross-entropy method's refit: the Gaussian of the ``elites`` best samples.
 
@@ -147,10 +164,12 @@ def cem_update(samples: torch.Tensor, scores: torch.Tensor, elites: int, min_std
     return best.mean(1), best.std(1, correction=0).clamp_min(min_std)
 
 
-def cem_plan(wm, h, z, obs0, init_mean, gens, s: PlanSettings, mean, std) -> torch.Tensor:
+def cem_plan(wm, h, z, obs0, init_mean, gens, s: PlanSettings, mean, std, update=None) -> torch.Tensor:
     """CEM for B starts at once: ``h``, ``z``, ``obs0`` (B, .), ``init_mean`` (B, K, A), ``gens`` B
     generators (start i draws its noise from ``gens[i]`` alone). Each iteration dreams all B x S plans
-    in one batched call. Returns the final mean (B, K, A)."""
+    in one batched call. ``update``: the refit (default :func:`cem_update`; notebook 07 passes the
+    learner's). Returns the final mean (B, K, A)."""
+    update = update or cem_update
     B, S = h.shape[0], s.samples
     idx = knot_index(s.horizon, s.knots)
     rows = [x.repeat_interleave(S, 0) for x in (h, z, obs0)]
@@ -159,7 +178,10 @@ def cem_plan(wm, h, z, obs0, init_mean, gens, s: PlanSettings, mean, std) -> tor
         eps = torch.stack([torch.randn((S, s.knots, ACT_DIM), generator=g) for g in gens])   # (B, S, K, A)
         plans = (m[:, None] + sd[:, None] * eps).clamp(-1.0, 1.0)
         scores = dream_scores(wm, *rows, plans[:, :, idx].reshape(B * S, s.horizon, ACT_DIM), mean, std)
-        m, sd = cem_update(plans, scores.view(B, S), s.elites, s.min_std)
+        m, sd = update(plans, scores.view(B, S), s.elites, s.min_std)
+        if tuple(m.shape) != tuple(init_mean.shape) or tuple(sd.shape) != tuple(init_mean.shape):
+            raise ValueError(f"the refit must return a mean and a spread of shape {tuple(init_mean.shape)} "
+                             f"(starts, knots, action), got {tuple(m.shape)} and {tuple(sd.shape)}")
     return m
 
 
@@ -170,10 +192,13 @@ def plan_generators(seeds) -> list[torch.Generator]:
 
 @torch.inference_mode()
 def plan_rollout(wm, seeds, horizon: int, mean, std, s: PlanSettings, batched: bool = True,
-                 progress=None) -> Rollout:
+                 progress=None, update=None, record: list | None = None) -> Rollout:
     """The planner in the real sim from ``env.reset(seed)`` for each seed, all in lockstep, replanning
     at every step from the state filtered on the true frames. ``batched=False`` plans the starts one
-    at a time (the same numbers drawn, the same model; for timing). Scored like every rollout."""
+    at a time (the same numbers drawn, the same model; for timing). Scored like every rollout.
+    ``update``: the CEM refit (default :func:`cem_update`). ``record``: a list that receives, at every
+    real step, the dream of each start's chosen plan, ``(B, horizon + 1, 6)`` in metres from the
+    filtered frame on (NaN rows for starts already done): what the planner expected to happen."""
     envs = [PushTEnv() for _ in seeds]
     B, K = len(envs), s.knots
     obs = np.zeros((horizon + 1, B, 6))
@@ -199,11 +224,13 @@ def plan_rollout(wm, seeds, horizon: int, mean, std, s: PlanSettings, batched: b
         tid = torch.as_tensor(ids)
         args = (h[tid], z[tid], norm[tid], plan_mean[tid] if s.warm else torch.zeros_like(plan_mean[tid]))
         if batched:
-            best = cem_plan(wm, *args, [gens[i] for i in ids], s, mean, std)
+            best = cem_plan(wm, *args, [gens[i] for i in ids], s, mean, std, update)
         else:
-            best = torch.cat([cem_plan(wm, *(x[j:j + 1] for x in args), [gens[i]], s, mean, std)
+            best = torch.cat([cem_plan(wm, *(x[j:j + 1] for x in args), [gens[i]], s, mean, std, update)
                               for j, i in enumerate(ids)])
         plan_mean[tid] = best
+        if record is not None:
+            record.append(_expected(wm, args[:3], best, ids, B, s, mean, std))
         a = h.new_zeros(B, ACT_DIM)
         a[tid] = best[:, 0]
         actions[t] = a.cpu().numpy()
@@ -223,6 +250,20 @@ def plan_rollout(wm, seeds, horizon: int, mean, std, s: PlanSettings, batched: b
     r, pos = r.cpu().numpy().astype(np.float64), pos.cpu().numpy().astype(np.float64)
     r[~alive], pos[~alive] = np.nan, np.nan
     return Rollout(obs=obs, actions=actions, rewards=r, pos_err=pos, success=success)
+
+
+def _expected(wm, start, best, ids, B: int, s: PlanSettings, mean, std) -> np.ndarray:
+    """(B, horizon + 1, 6) metres: the dream of each live start's chosen plan (``best``), NaN elsewhere."""
+    h, z, obs0 = start
+    plan = best[:, knot_index(s.horizon, s.knots)]                          # (b, T, A)
+    outs = []
+    for t in range(s.horizon):
+        h, z = wm.img_step(h, z, plan[:, t])
+        outs.append(wm.decode(h, z))
+    frames = torch.cat([obs0[None], wm.accumulate(torch.stack(outs), obs0)])   # (T+1, b, D) normalised
+    out = np.full((B, s.horizon + 1, frames.shape[-1]), np.nan)
+    out[ids] = (frames * std + mean).transpose(0, 1).cpu().numpy()
+    return out
 
 
 # --- the measurement -------------------------------------------------------------------------------

@@ -23,7 +23,7 @@ from pathlib import Path
 
 CHOICES = ("a", "b", "c")
 # Exercises with more options than the default three.
-EXERCISE_CHOICES = {"ex1": ("a", "b", "c", "d"), "ex3": ("a", "b", "c", "d")}
+EXERCISE_CHOICES = {"ex1": ("a", "b", "c", "d"), "ex3": ("a", "b", "c", "d"), "ex4": ("a", "b", "c", "d")}
 MIN_WORDS = 6
 
 

@@ -1,4 +1,4 @@
-"""The Colab install cell: one source (INSTALL_CELL in scripts/release.py) carried verbatim by all six
+"""The Colab install cell: one source (INSTALL_CELL in scripts/release.py) carried verbatim by all seven
 instructor notebooks and their student release, and what it tells a learner in Colab.
 
 The cell's logic runs here with a fake pip: ``subprocess.run`` is replaced by a function that writes
@@ -31,8 +31,8 @@ RELEASED = sorted((ROOT / "notebooks").glob("*.ipynb"))
 COLAB = {"torch": "2.11.0", "numpy": "2.1.3"}       # what the fake Colab came with
 
 
-def test_six_notebooks_and_their_release():
-    assert len(SOLUTIONS) == 6
+def test_seven_notebooks_and_their_release():
+    assert len(SOLUTIONS) == 7
     assert [p.name for p in RELEASED] == [p.name for p in SOLUTIONS]
 
 

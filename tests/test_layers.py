@@ -9,7 +9,7 @@ from pusht.stage_cache import PACKAGE, imports
 MODULES = sorted(m.name for m in pkgutil.walk_packages(pusht.__path__, "pusht."))
 # The one deliberate circle: ``claims.load_all`` imports the notebooks' claim modules so that their
 # @claim predicates register, and each of those imports ``claim`` from ``claims``.
-REGISTRY = {("pusht.nb.claims", f"pusht.nb.{m}_claims") for m in ("actor", "closing", "gap", "horizon")}
+REGISTRY = {("pusht.nb.claims", f"pusht.nb.{m}_claims") for m in ("actor", "closing", "gap", "horizon", "planning")}
 
 
 def graph() -> dict[str, set[str]]:

@@ -22,7 +22,7 @@ ASKED = re.compile(r'SELF_CHECKS\[\\?"(\w+)\\?"\]')
 
 def test_each_notebook_has_one_text_file_and_no_other_file_is_there():
     files = sorted(p.stem for p in prose.TEXT.glob("*.md") if p.name != "README.md")
-    assert len(NOTEBOOKS) == 6 and files == NOTEBOOKS
+    assert len(NOTEBOOKS) == 7 and files == NOTEBOOKS
 
 
 @pytest.mark.parametrize("notebook", NOTEBOOKS)

@@ -66,6 +66,8 @@ CONTROLS = {
     "the page's wiring": "the chapter page's gradient wiring, same model and seed: isolates the wiring",
     "the shortest horizon": "the same sweep at its shortest horizon: isolates the horizon",
     "reality": "the same policy from the same starts in the real simulator: isolates the model's error",
+    "the model without the change": "the same world model trained with one change undone (the data, predicting "
+                                    "changes, or the width), read on the same starts: isolates that change",
 }
 REGISTRY: dict[str, Claim] = {}
 LEDGER: list[dict] = []          # every evaluation in this process, in order
@@ -132,9 +134,9 @@ def note_if_false(holds: bool, evaluate) -> str:
 
 
 def load_all() -> dict[str, Claim]:
-    """Import every module that registers claims (the ``<nb>_claims`` modules of notebooks 03-06,
+    """Import every module that registers claims (the ``<nb>_claims`` modules of notebooks 03-07,
     whose ``@claim`` predicates register on import), and return the registry."""
-    from . import actor_claims, closing_claims, gap_claims, horizon_claims  # noqa: F401  (importing registers)
+    from . import actor_claims, closing_claims, gap_claims, horizon_claims, planning_claims  # noqa: F401  (registers)
 
     return REGISTRY
 
