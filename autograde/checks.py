@@ -35,13 +35,13 @@ class Test:
 
 
 def _gen(name: str, seed: int, kind: str = "call", **fixed) -> dict:
-    """A generated case (``pusht.grader.probes.expand``): generator ``name`` draws every input from the run's
+    """A generated case (``pusht.grader.cases.expand``): generator ``name`` draws every input from the run's
     nonce and ``seed``; ``fixed`` holds only what the case's property fixes, and how it is run
     (``of``, ``row``, ``module_grads``, ``helpers``)."""
     return {"kind": kind, "gen": name, "seed": seed, **fixed}
 
 
-# Every case below is drawn from the run's nonce (``pusht.grader.probes``' generators), edge cases included:
+# Every case below is drawn from the run's nonce (``pusht.grader.cases``' generators), edge cases included:
 # this file is public, so a fixed input could be recognised and answered from memory. The hand-worked
 # numbers (the lambda-return's [[10.25], [17]], the reward's -0.5 and -0.25, the disagreement's 0.25)
 # are the notebooks' visible tests; here each is a case of the same kind on numbers nobody has seen.
@@ -170,7 +170,43 @@ DISAGREE = Test("block_disagreement_impl_tests", "06_closing_the_gap", "block_di
          "here 0, not NaN: the square root's slope is infinite at 0, so do not take it there"),
 ])
 
-TESTS = {t.test_id: t for t in (REWARD, LAMBDA, LOSSES, DREAM, DISAGREE)}
+CEM = Test("cem_update_impl_tests", "07_planning", "cem_update", "pusht.plan:cem_update", [
+    Case(_gen("cem", 70, B=1, elites="all", min_std=0.0),
+         "with elites = S every sample is an elite: their mean and their POPULATION standard deviation "
+         "across the samples (dim 1), element by element (divide by elites, not elites - 1: the elites are "
+         "the whole set being fitted, not a sample of it; torch's .std() divides by n - 1 unless told "
+         "correction=0)"),
+    Case(_gen("cem", 71, B=1, min_std=0.0),
+         "the elites are the `elites` samples with the HIGHEST scores (higher is better), not the lowest "
+         "(sort the scores in descending order, or use topk), and both the mean and the spread are the "
+         "elites' alone, not all the samples'"),
+    Case(_gen("cem", 72, apart=True, min_std=0.0),
+         "each start refits to its own samples only: start b's elites are the best of samples[b] by "
+         "scores[b], whatever the other starts scored (here every score of one start lies above every "
+         "score of another: pick the elites along dim 1, start by start, never across the flattened batch)"),
+    Case(_gen("cem", 73, trail="plan", agree=True),
+         "the spread is floored at min_std element by element: max(std, min_std), not std + min_std; "
+         "where the elites agree exactly, or nearly, the spread is min_std, and a spread above the floor "
+         "stays as it is"),
+    Case(_gen("cem", 74, S=64, elites=8, min_std=0.05, trail=[4, 2]),
+         "the planner's shapes: samples (B, 64, 4, 2), scores (B, 64), 8 elites, min_std 0.05 give a mean "
+         "and a std of shape (B, 4, 2)"),
+    Case(_gen("cem", 75, trail="none"),
+         "samples (B, S) of single numbers give a mean and a std of shape (B,)"),
+    Case(_gen("cem", 76, trail="any"),
+         "any shape after the first two dimensions: samples (B, S, d1, ..., dk) give a mean and a std of "
+         "shape (B, d1, ..., dk), taken element by element across each start's elites"),
+    Case(_gen("cem", 77, elites="all"),
+         "elites = S, several starts: every sample of a start is an elite (population standard deviation)"),
+    Case(_gen("cem", 78, elites=1),
+         "a single elite: its own values as the mean, and a spread of 0 floored at min_std (not NaN: "
+         "a sample standard deviation would divide by elites - 1 = 0)"),
+    Case(_gen("cem", 79, trail="plan", agree=True, min_std="default"),
+         "min_std defaults to 0.0: called with three arguments the spread is not floored, so elites "
+         "that agree exactly give a spread of exactly 0"),
+])
+
+TESTS = {t.test_id: t for t in (REWARD, LAMBDA, LOSSES, DREAM, DISAGREE, CEM)}
 
 
 def reference_function(test: Test):

@@ -405,15 +405,12 @@ def _error_line(error) -> str:
 
 def _options(exercise: str) -> dict:
     """The option texts of an exercise (``EX1_OPTIONS``...: the notebook's own words, markdown bold
-    dropped); {} where they cannot be had. The modules import numpy, not torch (0.15 s)."""
-    import importlib
-
-    where = {"ex1": ("pusht.nb.gap", "EX1_OPTIONS"), "ex2": ("pusht.nb.horizon", "EX2_OPTIONS"),
-             "ex3": ("pusht.nb.closing", "EX3_OPTIONS")}
-    if exercise not in where:
-        return {}
+    dropped), from the module ``python -m pusht.exercise`` shows them from; {} where they cannot be
+    had. Notebooks 04-06's modules import numpy, not torch (0.15 s); notebook 07's imports torch."""
     try:
-        value = getattr(importlib.import_module(where[exercise][0]), where[exercise][1])
+        from pusht.exercise import EXERCISES as TERMINAL
+
+        value = TERMINAL[exercise].texts()[1]
     except Exception:      # noqa: BLE001  the page goes on without the option texts
         return {}
     return {k: str(v).replace("**", "") for k, v in value.items()} if isinstance(value, dict) else {}

@@ -71,7 +71,8 @@ NOTEBOOKS = sorted(p.name for p in SOURCE.glob("*.ipynb"))
 
 
 # The completion task cell of each predict-then-run exercise: "<ex>_order".
-EXERCISES = {"ex1": "04_imagination_gap", "ex2": "05_horizon", "ex3": "06_closing_the_gap"}
+EXERCISES = {"ex1": "04_imagination_gap", "ex2": "05_horizon", "ex3": "06_closing_the_gap",
+             "ex4": "07_planning"}
 
 
 def tool_env() -> dict:

@@ -58,6 +58,9 @@ EXPERIMENTS = {
     "ex2": _PIPELINE | {"experiment_ex2"},
     "ex3": {"experiment_ex3", "run_loop", "collect_episodes", "train_model_round", "train_agent_round",
             "measure_round"},
+    # notebook 07: the actor trained and evaluated in the recipe's model (the pipeline's), and the
+    # planner in the recipe's and the chapter's (``pusht.nb.planning.experiment``, ``plan_in``, ``pusht.plan``)
+    "ex4": _PIPELINE | {"experiment_ex4", "experiment", "plan_in", "plan_rollout", "cem_plan"},
 }
 
 

@@ -2,7 +2,7 @@
 
 The probe process (``probe.py``) runs a student's definitions with this copy of ``pusht`` bound
 over the real one, so the chapter's own ``reward_from_obs``, ``lambda_return``,
-``actor_critic_losses``, ``dream`` and ``block_disagreement`` do not exist there in any form: not
+``actor_critic_losses``, ``dream``, ``block_disagreement`` and ``cem_update`` do not exist there in any form: not
 as a guarded function, not as a closure, a ``__wrapped__``, a code object, a ``.pyc`` or source
 text on disk. A submission that calls them gets ``ReferenceRefused`` by construction, whatever
 name, wrapper or run-time lookup it reaches them through.

@@ -4,10 +4,10 @@
     python -m pusht.exercise ex2 --smoke         # the tiny config: seconds
     python -m pusht.exercise ex1 --predict b --reason "the model never learned how the block moves"    # no questions asked
 
-Notebooks 04, 05 and 06 each hold one exercise: read the question, lock a prediction (a letter and
-one sentence of why), run the experiment, and read how the measurement compares. This module is the
-same exercise without a notebook. It shows the notebook's question and options (the option texts
-are the notebook modules' own ``EX1_OPTIONS``, ``EX2_OPTIONS``, ``EX3_OPTIONS``), asks for the
+Notebooks 04, 05, 06 and 07 each hold one exercise: read the question, lock a prediction (a letter
+and one sentence of why), run the experiment, and read how the measurement compares. This module is
+the same exercise without a notebook. It shows the notebook's question and options (the option
+texts are the notebook modules' own ``EX1_OPTIONS`` to ``EX4_OPTIONS``), asks for the
 prediction on the terminal and locks it with ``pusht.predict.lock_prediction``: the same letters,
 the same reason rule, the same store (``.pusht_predictions.json`` in the working folder, or
 ``$PUSHT_PREDICTIONS``), and the first lock is kept, here and in the notebook alike. Then it runs
@@ -16,7 +16,8 @@ prints the reconciliation with the notebook's words (``ex1_reconciliation`` and 
 ``pusht.nb``).
 
 Where the notebook hands the experiment the learner's own code (Exercise 1 evaluates the ``dream``
-written in notebook 04), the terminal uses the package's: the exercise here is the prediction.
+written in notebook 04, Exercise 4 plans with the ``cem_update`` written in notebook 07), the
+terminal uses the package's: the exercise here is the prediction.
 
 Exit status: 0 after the reconciliation; 1 when no usable prediction was given (too many refused
 answers, or the input ended) or the experiment failed; 2 for a usage error (unknown exercise, bad
@@ -121,6 +122,29 @@ def _reconcile_ex3(session, result) -> tuple[str, str]:
     return ex3_reconciliation(result.rounds)
 
 
+def _experiment_ex4(session, progress):
+    """Notebook 07's ``experiment_ex4``: the two world models it acts in, the chapter's and the recipe's
+    (trained or loaded from the cache, each one's gate read on the held-out starts, as the notebook's
+    sections 1-3 do before its prediction), then the actor trained in the recipe's model and the
+    planner in both, in reality from the same starts, with zero actions and the expert. ``Ex4Result``."""
+    from pusht.nb import planning as nb07
+
+    cfg = session.cfg
+    s = nb07.settings(cfg)
+    seeds = nb07.starts(cfg, s)
+    rungs = nb07.train_ladder(cfg, seeds, s, session.cache, progress=progress, names=["chapter", "recipe"])
+    result = nb07.experiment(cfg, rungs, s, seeds, session.cache, progress=progress)
+    (session.metrics / f"ex4_seed{cfg.seed}.json").write_text(
+        json.dumps(nb07.as_json(rungs, {}, result, cfg, s), sort_keys=True, indent=2, default=float) + "\n")
+    return result
+
+
+def _reconcile_ex4(session, result) -> tuple[str, str]:
+    from pusht.nb.planning import ex4_reconciliation
+
+    return ex4_reconciliation(result)
+
+
 @dataclass(frozen=True)
 class Exercise:
     """One predict-then-run exercise: its words, and the notebook's experiment and reconciliation."""
@@ -178,6 +202,20 @@ EXERCISES = {ex.name: ex for ex in [
         "\"shrinks\" means.",
         "Which outcome do you expect?",
         "pusht.nb.closing", "EX3_OPTIONS", "EX3_NOTE", "metrics/closing", _experiment_ex3, _reconcile_ex3),
+    Exercise(
+        "ex4", "07_planning",
+        "notebook 07: an actor trained in a better world model, and a planner searching in it; which succeeds?",
+        "Notebook 07's recipe for a better world model: richer data (the expert with noise, pauses mid-push, "
+        "random walks and pokes), a model that predicts the change of each frame, twice as wide. Two ways to "
+        "act in it, from the same held-out starts: the actor-critic of notebook 03, trained in its dreams and "
+        "deployed; and a planner that trains nothing: at every real step it samples short plans, dreams each "
+        "one, refits a Gaussian to the best (the cross-entropy method), takes the first action of its final "
+        "plan in the real simulator, and plans again from the true state. The same planner also runs in the "
+        "chapter's own model. Here the experiment first trains (or loads) both models and reads each one's "
+        "gate, as the notebook does before its prediction; the planner uses the package's refit where the "
+        "notebook uses yours.",
+        "Which of the actor and the planner **succeeds in reality**?",
+        "pusht.nb.planning", "EX4_OPTIONS", "EX4_NOTE", "metrics/planning", _experiment_ex4, _reconcile_ex4),
 ]}
 
 
@@ -200,7 +238,7 @@ def show_question(ex: Exercise) -> dict:
     print()
     print(_wrap(ex.context))
     print()
-    print(_wrap(ex.question))
+    print(_wrap(_plain(ex.question)))
     if note:
         print()
         print(_wrap(_plain(note)))

@@ -2,8 +2,8 @@
 flag nbgrader sets while it runs a notebook.
 
 Nothing here imports anything of the package, so any module can take these names without tying
-itself to the grader: ``reward.py``, ``imagination.py``, ``evaluate.py`` and ``ensemble.py`` mark
-their exercise implementations with ``@reference``; the grader (``autograde/stripped.py``) finds
+itself to the grader: ``reward.py``, ``imagination.py``, ``evaluate.py``, ``ensemble.py`` and ``plan.py``
+mark their exercise implementations with ``@reference``; the grader (``autograde/stripped.py``) finds
 them by the mark and ships its probe process a copy of the package in which each only raises
 ``ReferenceRefused`` (``pusht/grader/probes.py`` says why).
 """

@@ -59,9 +59,16 @@ def block_disagreement(frames, std):
     return torch.where(var > 0, var.clamp_min(1e-30).sqrt(), torch.zeros_like(var))
 
 
+def cem_update(samples, scores, elites, min_std=0.0):
+    order = scores.argsort(dim=1, descending=True)[:, :elites]
+    best = samples[torch.arange(samples.shape[0])[:, None], order]
+    mean = best.mean(1)
+    return mean, ((best - mean[:, None]) ** 2).mean(1).sqrt().clamp_min(min_std)
+
+
 def test_correct_implementations_pass_every_case():
     for test, fn in ((checks.REWARD, reward), (checks.LAMBDA, lambda_return), (checks.DREAM, dream),
-                     (checks.DISAGREE, block_disagreement)):
+                     (checks.DISAGREE, block_disagreement), (checks.CEM, cem_update)):
         v = verdict(test, fn)
         assert v.passed, (test.test_id, v.message)
 

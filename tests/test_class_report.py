@@ -76,8 +76,8 @@ def plan_for(n: int, seed: int = 3) -> dict:
 
     rng = random.Random(seed)
     ids = [f"stu_{i:03d}" for i in range(n - 4)] + [HOSTILE, BIDI, *LOOKALIKE]
-    weights = {"ex1": [1, 6, 3, 1], "ex2": [5, 2, 3], "ex3": [4, 3, 2, 1]}
-    truth = {"ex1": ("b", "c"), "ex2": ("c", "a"), "ex3": ("b", "a")}     # what runs mostly measure
+    weights = {"ex1": [1, 6, 3, 1], "ex2": [5, 2, 3], "ex3": [4, 3, 2, 1], "ex4": [1, 3, 5, 2]}
+    truth = {"ex1": ("b", "c"), "ex2": ("c", "a"), "ex3": ("b", "a"), "ex4": ("b", "d")}   # what runs mostly measure
     plan = {}
     for s in ids:
         plan[s] = {}
@@ -137,6 +137,7 @@ FAIL_PLAN = {       # test id: (share failing, the case most of them fail, anoth
     "losses_impl_tests": (0.2, 1, 2),
     "dream_impl_tests": (0.3, 3, 1),
     "block_disagreement_impl_tests": (0.15, 9, 2),
+    "cem_update_impl_tests": (0.25, 3, 1),
 }
 
 

@@ -166,6 +166,22 @@ def test_ex2_on_a_terminal_asks_again_after_a_refused_letter_and_an_empty_reason
     assert len(list((out / "metrics" / "horizon_sweep").glob("seed0_h*_actor*.json"))) == runs
 
 
+def test_ex4_with_flags_trains_both_models_plans_and_reconciles(out, env, tmp_path):
+    # notebook 07's experiment: the chapter's and the recipe's world models, the actor in the recipe's,
+    # the planner (the package's refit) in both; the prediction given as flags, no terminal needed
+    code, stdout, stderr = no_terminal(args("ex4", out, "--predict", "(B)", "--reason", REASON), env, tmp_path,
+                                       timeout=300)
+    assert code == 0, (stdout, stderr)
+    in_order(stdout, "Which of the actor and the planner succeeds in reality?", "(d) Neither succeeds",
+             "[prediction locked] ex4: (b) at", "[experiment started] ex4 at", "[experiment finished] ex4",
+             "Measured: (", "Reconcile ex4: you predicted (b); the measurement says (")
+    assert "**" not in stdout and "Traceback" not in stdout + stderr and set(store(env)) == {"ex4"}
+    saved = json.loads((out / "metrics" / "planning" / "ex4_seed0.json").read_text())
+    assert set(saved["gates"]) == {"chapter", "recipe"} and saved["letter"] in "abcd"
+    assert set(saved["outcomes"]) >= {"actor", "planner", "planner_chapter", "zero", "expert"}
+    assert f"So the measured answer is ({saved['letter']})." in stdout
+
+
 # --- refused and missing answers: a clear message, nothing locked, nothing run ------------------------
 def test_a_letter_refused_three_times_gives_up(out, env, tmp_path):
     t = Terminal(args("ex1", out), env, tmp_path)
@@ -213,7 +229,7 @@ def test_no_terminal_and_no_flags_says_how_to_run_it(out, env, tmp_path):
 
 def test_an_unknown_exercise_is_refused_with_the_list(out, env, tmp_path):
     code, _, stderr = no_terminal(args("ex9", out), env, tmp_path)
-    assert code == 2 and "unknown exercise 'ex9': choose one of ex1, ex2, ex3" in stderr
+    assert code == 2 and "unknown exercise 'ex9': choose one of ex1, ex2, ex3, ex4" in stderr
     assert "Traceback" not in stderr
 
 

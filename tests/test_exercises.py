@@ -157,6 +157,61 @@ def disagreement_detached(frames, std):
     return _safe_root((frames.detach()[..., 2:4] * std[2:4]).var(dim=0, correction=0).sum(-1))
 
 
+def _elites(samples, scores, elites):
+    idx = scores.topk(elites, dim=1).indices
+    return torch.stack([samples[b, idx[b]] for b in range(samples.shape[0])])
+
+
+def cem_sample_std(samples, scores, elites, min_std=0.0):
+    """torch's default .std(): divides by elites - 1, the elites taken for a sample."""
+    best = _elites(samples, scores, elites)
+    return best.mean(1), best.std(1).clamp_min(min_std)
+
+
+def cem_lowest(samples, scores, elites, min_std=0.0):
+    """Sorts the scores ascending and keeps the first: the worst plans."""
+    idx = scores.argsort(dim=1)[:, :elites]
+    best = torch.stack([samples[b, idx[b]] for b in range(samples.shape[0])])
+    return best.mean(1), best.std(1, correction=0).clamp_min(min_std)
+
+
+def cem_mixes_starts(samples, scores, elites, min_std=0.0):
+    """The best B * elites plans of the whole batch, whatever start they belong to."""
+    B, S = scores.shape
+    idx = scores.reshape(-1).topk(B * elites).indices
+    best = samples.reshape(B * S, *samples.shape[2:])[idx].reshape(B, elites, *samples.shape[2:])
+    return best.mean(1), best.std(1, correction=0).clamp_min(min_std)
+
+
+def cem_first_start(samples, scores, elites, min_std=0.0):
+    """The first start's elites, taken for every start."""
+    best = samples[:, scores[0].topk(elites).indices]
+    return best.mean(1), best.std(1, correction=0).clamp_min(min_std)
+
+
+def cem_no_floor(samples, scores, elites, min_std=0.0):
+    """Forgets the floor: a search whose elites agree collapses to a point."""
+    best = _elites(samples, scores, elites)
+    return best.mean(1), best.std(1, correction=0)
+
+
+def cem_floor_added(samples, scores, elites, min_std=0.0):
+    """Adds the floor to every spread instead of flooring it."""
+    best = _elites(samples, scores, elites)
+    return best.mean(1), best.std(1, correction=0) + min_std
+
+
+def cem_default_floor(samples, scores, elites, min_std=0.05):
+    """The planner's floor as the default: min_std is 0.0 when not given."""
+    best = _elites(samples, scores, elites)
+    return best.mean(1), best.std(1, correction=0).clamp_min(min_std)
+
+
+def cem_spread_of_all(samples, scores, elites, min_std=0.0):
+    """The elites' mean, but the spread of all the samples."""
+    return _elites(samples, scores, elites).mean(1), samples.std(1, correction=0).clamp_min(min_std)
+
+
 def _with_return(fn, default_return):
     """``fn`` as a learner writes it: the return function an optional 8th argument, theirs by default."""
     def losses(agent, states, rewards, entropy, gamma, lam, ent_coef, return_fn=default_return):
@@ -225,6 +280,29 @@ def test_block_disagreement():
         run_visible(nb, tests_id, block_disagreement=disagreement_sample_variance)
     v = hidden(test, disagreement_sample_variance)
     assert not v.passed and "POPULATION variances" in v.message, v.message
+
+
+@pytest.mark.filterwarnings("ignore:std\\(\\)")      # the sample std of one elite
+def test_cem_update():
+    test = checks.CEM
+    nb, tests_id = "07_planning", "cem_update_impl_tests"
+    good = solution(nb, "cem_update_impl", "cem_update")
+    run_visible(nb, tests_id, cem_update=good)
+    assert hidden(test, good).passed
+    for wrong, hint in ((cem_mixes_starts, "its own samples"), (cem_first_start, "its own samples"),
+                        (cem_floor_added, "not std + min_std"), (cem_default_floor, "defaults to 0.0")):
+        run_visible(nb, tests_id, cem_update=wrong)          # shapes and the case by hand cannot tell
+        v = hidden(test, wrong)
+        assert not v.passed and hint in v.message, (wrong.__name__, v.message)
+    for wrong, visible_says, hint in (
+            (cem_sample_std, "divide by the number of elites", "POPULATION standard deviation"),
+            (cem_lowest, "the elites 1 and 3", "HIGHEST scores"),
+            (cem_spread_of_all, "the elites 1 and 3 have spread 1", "the elites' alone"),
+            (cem_no_floor, "the floor min_std", "floored at min_std element by element")):
+        with pytest.raises(AssertionError, match=visible_says):   # the visible tests catch these ...
+            run_visible(nb, tests_id, cem_update=wrong)
+        v = hidden(test, wrong)                                    # ... and the hidden ones say why
+        assert not v.passed and hint in v.message, (wrong.__name__, v.message)
 
 
 @pytest.mark.parametrize("test", list(checks.TESTS.values()), ids=list(checks.TESTS))

@@ -50,7 +50,20 @@ SCHEMA = {
         "leaderboard": {"type": "array"}},
     "anyOf": [{"required": ["score"]}, {"properties": {"tests": {"items": {"required": ["score"]}}}}],
 }
-AUTOMATIC = 19 + 3          # five hidden-test cells (4+4+4+3+4) and three completion points
+def _automatic_points() -> float:
+    """What the grader gives by itself for full marks: every hidden-test cell's points and every
+    completion point (the ``exN_order`` tasks), read from the instructor's notebooks' own metadata
+    (notebooks 02-07: six hidden-test cells, 4+4+4+3+4+4, and four completion points)."""
+    total = 0.0
+    for name in NOTEBOOKS:
+        for c in nbformat.read(ROOT / "solutions" / name, as_version=4).cells:
+            meta = c.metadata.get("nbgrader", {})
+            if meta.get("grade_id", "").endswith(("_tests", "_order")):
+                total += float(meta.get("points", 0))
+    return total
+
+
+AUTOMATIC = _automatic_points()
 
 
 # --- the bundle ------------------------------------------------------------------------------------
@@ -325,7 +338,8 @@ def test_the_unchanged_release_scores_zero_on_every_automatic_test(release_hand_
         assert by_cell[g]["max_score"] > 0 and "first failure" in by_cell[g]["output"]
         assert "NotImplementedError" in by_cell[g]["output"]
     assert "no prediction receipt" in by_cell["ex1_order"]["output"]
-    for g in ("ex2_order", "ex3_order", "block_disagreement_impl_tests"):      # 05 and 06 were not handed in
+    for g in ("ex2_order", "ex3_order", "block_disagreement_impl_tests",      # 05-07 were not handed in
+              "ex4_order", "cem_update_impl_tests"):
         assert by_cell[g]["score"] == 0 and "not in this submission" in by_cell[g]["output"]
     assert "Notebooks graded: 01_world_model.ipynb, 02_reward.ipynb, 03_imagination_actor.ipynb, " \
            "04_imagination_gap.ipynb." in results["output"]
@@ -376,7 +390,7 @@ def _solution_and_hidden_lines() -> tuple[list[str], list[str]]:
 
 def test_nothing_hidden_reaches_results_or_stdout(full_marks, release_hand_in):
     secrets = _secret_lines()
-    assert len(secrets) > 40, secrets          # the hidden tests, the five exercises, the sentences, the scheme
+    assert len(secrets) > 40, secrets          # the hidden tests, the six exercises, the sentences, the scheme
     for results, stdout, _ in (full_marks, release_hand_in):
         text = json.dumps(results, ensure_ascii=False)
         shown = json.loads(text)

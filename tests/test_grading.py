@@ -63,13 +63,14 @@ def test_every_student_is_in_the_gradebook_and_the_csv(graded):
 
 def test_perfect_student_gets_every_automatic_point(graded):
     course, _, _ = graded
-    for nb in ("02_reward", "03_imagination_actor", "04_imagination_gap"):
+    for nb in ("02_reward", "03_imagination_actor", "04_imagination_gap", "06_closing_the_gap", "07_planning"):
         scores = cell_scores(course, "perfect", nb)
         tests = {k: v for k, v in scores.items() if k.endswith("_tests")}
         assert tests and all(v > 0 for v in tests.values()), (nb, scores)
     assert cell_scores(course, "perfect", "04_imagination_gap")["ex1_order"] == 1
     assert cell_scores(course, "perfect", "05_horizon")["ex2_order"] == 1
     assert cell_scores(course, "perfect", "06_closing_the_gap")["ex3_order"] == 1
+    assert cell_scores(course, "perfect", "07_planning")["ex4_order"] == 1
 
 
 def test_experiment_before_prediction_loses_the_completion_point_only(graded):

@@ -1,7 +1,7 @@
 """No hidden input is knowable before the run (issue 37, item 3).
 
 ``autograde/checks.py`` is public, so every hidden case is drawn from the run's nonce by a generator
-in ``pusht/grader/probes.py`` that keeps the property the case tests. Here:
+in ``pusht/grader/cases.py`` that keeps the property the case tests. Here:
 
 * every case's inputs (each tensor and number it hands the function, the agent's and the world
   model's weights, the start frames) differ between two nonces, except the numbers the case's
@@ -31,6 +31,7 @@ from pusht.ensemble import block_disagreement as ref_disagreement
 from pusht.evaluate import dream as ref_dream
 from pusht.imagination import actor_critic_losses as ref_losses
 from pusht.imagination import lambda_return as ref_lambda
+from pusht.plan import cem_update as ref_cem
 from pusht.reward import reward_from_obs as ref_reward
 
 NONCES = random.Random(37).sample(range(2 ** 24), 20)        # the grader's nonces lie in [0, 2^24)
@@ -51,6 +52,11 @@ PROPERTY_FIXED = {
     ("block_disagreement_impl_tests", 3): {"K": 3},                                     # (3, 15, 64, 6)
     ("block_disagreement_impl_tests", 5): {"K_min": 4, "K_max": 8},
     ("block_disagreement_impl_tests", 6): {"K": 1},
+    ("cem_update_impl_tests", 1): {"B": 1, "min_std": 0.0},                            # one start, all elites
+    ("cem_update_impl_tests", 2): {"B": 1, "min_std": 0.0},
+    ("cem_update_impl_tests", 3): {"min_std": 0.0},
+    ("cem_update_impl_tests", 5): {"S": 64, "elites": 8, "min_std": 0.05},              # the planner's
+    ("cem_update_impl_tests", 9): {"elites": 1},
 }
 _NOT_INPUTS = {"kind", "gen", "seed", "of", "row", "module_grads", "helpers"}
 
@@ -156,6 +162,13 @@ def losses_indep(agent, states, rewards, entropy, gamma, lam, ent_coef, return_f
     return -G.mean() - ent_coef * entropy, critic
 
 
+def cem_indep(samples, scores, elites, min_std=0.0):
+    ranked = torch.sort(scores, dim=1, descending=True).indices[:, :elites]
+    best = torch.take_along_dim(samples, ranked.reshape(*ranked.shape, *[1] * (samples.dim() - 2)), dim=1)
+    var = best.var(dim=1, unbiased=False)
+    return best.mean(dim=1), torch.maximum(var.sqrt(), torch.tensor(float(min_std)))
+
+
 @pytest.mark.parametrize("test", list(checks.TESTS.values()), ids=list(checks.TESTS))
 def test_the_package_passes_every_case_on_many_nonces(test):
     fn = checks.reference_function(test)
@@ -168,7 +181,8 @@ def test_independent_implementations_pass_every_case_on_many_nonces():
     from pusht.evaluate import dream
 
     for test, fn in ((checks.REWARD, reward_indep), (checks.LAMBDA, lambda_indep),
-                     (checks.DISAGREE, disagreement_indep), (checks.DREAM, dream), (checks.LOSSES, losses_indep)):
+                     (checks.DISAGREE, disagreement_indep), (checks.DREAM, dream), (checks.LOSSES, losses_indep),
+                     (checks.CEM, cem_indep)):
         for fresh in NONCES[:8]:
             v = checks.judge(test, checks.probe_in_process(test, fn, fresh))
             assert v.passed, (test.test_id, fresh, v.message)
@@ -283,6 +297,41 @@ def test_the_dream_and_losses_cases_keep_their_properties(fresh):
     agent, states, rewards, entropy, g, lam, ent, fn = _args(checks.LOSSES, 1, fresh)
     assert tuple(states.shape) == (16, 64, 80) and (g, lam, ent) == (0.99, 0.95, 3e-4)
     assert ((rewards <= 0) & (rewards >= -1)).all()
+
+
+@pytest.mark.parametrize("fresh", NONCES[:10])
+def test_the_cem_cases_keep_their_properties(fresh):
+    C = checks.CEM
+    for i in range(len(C.cases)):                                      # no ties: the elites are one set
+        samples, scores, elites = _args(C, i, fresh)[:3]
+        assert samples.shape[:2] == scores.shape and 1 <= elites <= scores.shape[1]
+        assert all(len(set(row.tolist())) == len(row) for row in scores), i + 1
+    samples, scores, elites, min_std = _args(C, 0, fresh)              # one start, every sample an elite
+    assert scores.shape[0] == 1 and elites == scores.shape[1] and min_std == 0.0
+    samples, scores, elites, min_std = _args(C, 1, fresh)              # one start, some elites
+    assert scores.shape[0] == 1 and 2 <= elites < scores.shape[1]
+    samples, scores, elites, min_std = _args(C, 2, fresh)              # starts whose scores lie apart
+    lo, hi = scores.min(1).values, scores.max(1).values
+    assert scores.shape[0] >= 2 and all(hi[a] < lo[b] or hi[b] < lo[a] for a in range(len(lo)) for b in range(a))
+    for i in (3, 9):                                                   # the floor: spreads 0, below and above it
+        args = _args(C, i, fresh)
+        samples, scores, elites = args[:3]
+        assert samples.dim() == 4 and samples.shape[-1] == 2
+        std = ref_cem(samples, scores, elites)[1]
+        unit = args[3] if i == 3 else None
+        assert (std == 0).any() and (std > 0).any()
+        if unit is not None:
+            assert ((std > 0) & (std < unit)).any() and (std > unit).any()
+            assert torch.equal(ref_cem(*args)[1], std.clamp_min(unit))
+    assert len(_args(C, 9, fresh)) == 3                                # min_std left to its default
+    samples, scores, elites, min_std = _args(C, 4, fresh)              # the planner's shapes
+    assert samples.shape[1:] == (64, 4, 2) and (elites, min_std) == (8, 0.05)
+    assert _args(C, 5, fresh)[0].dim() == 2 and _args(C, 6, fresh)[0].dim() in (4, 5)
+    samples, scores, elites, min_std = _args(C, 7, fresh)
+    assert scores.shape[0] >= 2 and elites == scores.shape[1]
+    samples, scores, elites, min_std = _args(C, 8, fresh)              # one elite: the floor, not NaN
+    assert elites == 1 and torch.equal(ref_cem(samples, scores, elites, min_std)[1],
+                                       torch.full(samples.shape[:1] + samples.shape[2:], min_std))
 
 
 # --- (c) memorising hand-ins ---------------------------------------------------------------------------------

@@ -2,7 +2,7 @@
 and the autograded notebooks (autograde/to_grade.py), filled as an instructor fills it, and applied
 with ``python -m autograde.manual_grade --from-csv`` (autograde/manual_grade.py).
 
-The gradebook is made with nbgrader's own API in this course's shape (notebooks 04-06, each with a
+The gradebook is made with nbgrader's own API in this course's shape (notebooks 04-07, each with a
 one-sentence answer graded by hand; 04 also a test cell and a completion task cell), and scores go in
 through ``autograde.gradebook.record``, the function grading uses, as in tests/test_lms_export.py. The
 autograded notebooks are small ones written with nbformat, carrying nbgrader's cell metadata. Nothing
@@ -21,13 +21,14 @@ from autograde import gradebook, manual_grade
 from autograde.course import ASSIGNMENT, COURSE_ID, tool_env
 from autograde.to_grade import COLUMNS, TO_GRADE_FILE, mark_scheme, write_to_grade
 
-SENTENCES = {"04_imagination_gap": "ex1_sentence", "05_horizon": "ex2_sentence", "06_closing_the_gap": "ex3_sentence"}
+SENTENCES = {"04_imagination_gap": "ex1_sentence", "05_horizon": "ex2_sentence", "06_closing_the_gap": "ex3_sentence",
+             "07_planning": "ex4_sentence"}
 
 
 @pytest.fixture(scope="module")
 def template(tmp_path_factory):
     """An empty gradebook of the assignment in miniature: 04 (a 3-point test cell, ex1_sentence by
-    hand, ex1_order a completion task), 05 (ex2_sentence), 06 (ex3_sentence)."""
+    hand, ex1_order a completion task), 05 (ex2_sentence), 06 (ex3_sentence), 07 (ex4_sentence)."""
     from nbgrader.api import Gradebook
 
     path = tmp_path_factory.mktemp("template") / "gradebook.db"
@@ -154,6 +155,9 @@ def test_the_sheet_lists_every_answer_to_grade_with_name_answer_and_mark_scheme(
         ("06_closing_the_gap", "ex3_sentence", "canvas_101", "to grade"),
         ("06_closing_the_gap", "ex3_sentence", "canvas_102", "no answer (0)"),
         ("06_closing_the_gap", "ex3_sentence", "s003", "to grade"),
+        ("07_planning", "ex4_sentence", "canvas_101", "to grade"),
+        ("07_planning", "ex4_sentence", "canvas_102", "to grade"),
+        ("07_planning", "ex4_sentence", "s003", "to grade"),
     ]
     by = {(r["student_id"], r["notebook"]): r for r in rows}
     first = by[("canvas_102", "05_horizon")]
@@ -162,6 +166,7 @@ def test_the_sheet_lists_every_answer_to_grade_with_name_answer_and_mark_scheme(
     assert first["mark_scheme"] == mark_scheme()["ex2_sentence"] and first["mark_scheme"].startswith("1 point")
     assert (first["max_score"], first["current_score"], first["score"], first["comment"]) == ("1", "", "", "")
     assert by[("canvas_102", "06_closing_the_gap")]["current_score"] == "0"
+    assert by[("s003", "07_planning")]["mark_scheme"] == mark_scheme()["ex4_sentence"]
 
 
 def test_a_filled_sheet_is_applied_at_once_with_one_feedback_run(course, feedback_calls):

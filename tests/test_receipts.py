@@ -15,11 +15,9 @@ import pytest
 
 from autograde import cellcode
 from autograde import receipts
+from autograde.course import EXERCISES            # {"ex1": "04_imagination_gap", ..., "ex4": "07_planning"}
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-EXERCISES = {"ex1": "04_imagination_gap", "ex2": "05_horizon", "ex3": "06_closing_the_gap"}
 
 
 @pytest.fixture(scope="module")

@@ -2,7 +2,7 @@
 
     python -m autograde.classes.honest OUT.zip --work DIR
 
-Each student is a complete six-notebook hand-in made from the instructor's answers, and each one
+Each student is a complete hand-in of every notebook, made from the instructor's answers, and each one
 differs from the plain executed solutions in one way learners' hand-ins differ. The notebooks
 are really executed (a Jupyter kernel per notebook, smoke config), in the order the learner ran
 their cells, restarts included, so receipts, execution counts and outputs are what a kernel
@@ -28,6 +28,7 @@ from pathlib import Path
 
 import nbformat
 from ..cellcode import gid, source
+from ..course import EXERCISES
 
 ROOT = Path(__file__).resolve().parents[2]
 NOTEBOOKS = sorted(p.stem for p in (ROOT / "solutions").glob("*.ipynb"))
@@ -49,7 +50,7 @@ STUDENTS = {
     LOOKALIKE[0]: "the solutions, handed in under this id",
     LOOKALIKE[1]: "the solutions, under an id that looks the same (a Cyrillic i)",
 }
-EXERCISE_NOTEBOOKS = {"04_imagination_gap": "ex1", "05_horizon": "ex2", "06_closing_the_gap": "ex3"}
+EXERCISE_NOTEBOOKS = {stem: ex for ex, stem in EXERCISES.items()}     # {"04_imagination_gap": "ex1", ...}
 
 
 # --- building notebooks ---------------------------------------------------------------------------
@@ -274,6 +275,11 @@ SCRATCH = {
                            "_f = torch.randn(3, 5, 6)\n"
                            "print('same as the package:', torch.allclose(block_disagreement(_f, torch.ones(6)), "
                            "ensemble.block_disagreement(_f, torch.ones(6))))\n"),
+    "07_planning": ("cem_update_impl",
+                    "import pusht.plan as plan\n"
+                    "_x, _s = torch.randn(2, 10, 3), torch.randn(2, 10)\n"
+                    "print('same as the package:', all(torch.allclose(a, b) for a, b in "
+                    "zip(cem_update(_x, _s, 4, 0.05), plan.cem_update(_x, _s, 4, 0.05))))\n"),
 }
 
 DRAFTS = {   # a first attempt left above the answer cell (a copy of it, metadata and all)
@@ -283,6 +289,11 @@ DRAFTS = {   # a first attempt left above the answer cell (a copy of it, metadat
     "03_imagination_actor": ("lambda_return_impl", "def lambda_return(rewards, values, gamma, lam):\n"
                              "    raise NotImplementedError('draft')\n"),
     "06_closing_the_gap": ("ex3_prediction", None),      # the prediction cell twice: the copy runs again
+    "07_planning": ("cem_update_impl", "def cem_update(samples, scores, elites, min_std=0.0):\n"
+                    "    # first try: the lowest scores, and no floor\n"
+                    "    idx = scores.argsort(dim=1)[:, :elites]\n"
+                    "    best = torch.stack([samples[b, idx[b]] for b in range(len(samples))])\n"
+                    "    return best.mean(1), best.std(1)\n"),
 }
 
 NUMERIC = {
@@ -313,6 +324,18 @@ NUMERIC = {
                            "    var = sum(((b - mean) ** 2).sum(-1) for b in block) / K\n"
                            "    safe = torch.where(var > 0, var, torch.ones_like(var))\n"
                            "    return torch.where(var > 0, safe ** 0.5, torch.zeros_like(var))\n"),
+    "07_planning": ("cem_update_impl", "    ### BEGIN SOLUTION\n",
+                    "    ### BEGIN SOLUTION\n"
+                    "    B, S = scores.shape\n"
+                    "    means, stds = [], []\n"
+                    "    for b in range(B):\n"
+                    "        order = sorted(range(S), key=lambda j: float(scores[b, j]), reverse=True)[:elites]\n"
+                    "        best = samples[b, order].double()\n"
+                    "        m = best.mean(0)\n"
+                    "        sd = ((best - m) ** 2).sum(0) / np.float64(len(order))\n"
+                    "        means.append(m.to(samples.dtype))\n"
+                    "        stds.append(torch.clamp(sd ** 0.5, min=np.float64(min_std)).to(samples.dtype))\n"
+                    "    return torch.stack(means), torch.stack(stds)\n"),
 }
 
 

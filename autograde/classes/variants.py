@@ -1,4 +1,4 @@
-"""Honest variants of the five graded functions: the instructor's answers, rewritten through the
+"""Honest variants of the six graded functions: the instructor's answers, rewritten through the
 ways Python binds and mutates module state, each one worth full marks.
 
     python -m autograde.classes.variants OUT.zip [--n 40] [--seed 0] [--work DIR] [--executed DIR]
@@ -140,6 +140,14 @@ GRADED = {g.function: g for g in (
            "var = block.var(dim={kdim}, correction={corr}).sum(-1)\n"
            "positive = var > {zero}\n"
            "return {where}(positive, {where}(positive, var, {one}).sqrt(), {zero})\n",
+           "import sys\nimport numpy as np\nimport torch\n"),
+    Graded("cem_update", "07_planning", "cem_update_impl", "cem_update_impl_tests", "cem",
+           ("samples", "scores", "elites", "min_std=0.0"),
+           {"samples": "Tensor", "scores": "Tensor", "elites": "int", "min_std": "float"}, "tuple[Tensor, Tensor]",
+           (Const("sdim", "1", "int"), Const("corr", "0", "int"), Const("stack", "{torch}.stack", "fn")),
+           "idx = scores.topk(elites, dim={sdim}).indices\n"
+           "best = {stack}([samples[b, idx[b]] for b in range(samples.shape[0])])\n"
+           "return best.mean({sdim}), best.std({sdim}, correction={corr}).clamp_min(min_std)\n",
            "import sys\nimport numpy as np\nimport torch\n"),
 )}
 NOTEBOOK_FUNCTIONS = {}
@@ -291,7 +299,7 @@ def draw_class(n: int, seed: int = 0, depth: tuple[int, int] = (1, 2), candidate
     03 hand-ins carry two), drawn with ``seed``: each hand-in's recipes are chosen greedily from
     ``candidates`` random draws so that the class covers every kind, every binder outside a wrap,
     then every store/binder pair, as far as ``n`` allows. The notebooks take turns (02, 03, 04, 06,
-    02, ...)."""
+    07, 02, ...)."""
     rng = random.Random(seed)
     notebooks = sorted(NOTEBOOK_FUNCTIONS)
     covered: set[str] = set()
