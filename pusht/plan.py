@@ -169,7 +169,7 @@ def cem_plan(wm, h, z, obs0, init_mean, gens, s: PlanSettings, mean, std, update
     generators (start i draws its noise from ``gens[i]`` alone). Each iteration dreams all B x S plans
     in one batched call. ``update``: the refit (default :func:`cem_update`; notebook 07 passes the
     learner's). Returns the final mean (B, K, A)."""
-    update = update or cem_update
+    update = cem_update if update is None else update      # the learner's refit, even a falsy one
     B, S = h.shape[0], s.samples
     idx = knot_index(s.horizon, s.knots)
     rows = [x.repeat_interleave(S, 0) for x in (h, z, obs0)]

@@ -305,6 +305,50 @@ def test_cem_update():
         assert not v.passed and hint in v.message, (wrong.__name__, v.message)
 
 
+def test_the_planner_of_exercise_4_runs_the_learners_refit_never_the_packages(tmp_path):
+    """Notebook 07's experiment hands its planner ``update=cem_update``, the learner's: every refit of
+    the planner is theirs (the package's own is never entered, even for a refit that is falsy, a
+    callable object with ``__len__`` 0), and with the solution's refit it plans what the package's does.
+    The recipe's world model of the smoke config, trained here, as the notebook's planner gets it."""
+    import sys
+
+    import pusht.plan as plan
+    from pusht.nb import planning as nb07
+    from pusht.wm_stage import world_model_stage
+
+    cfg = make_config(smoke=True)
+    s = nb07.settings(cfg)
+    seeds = nb07.starts(cfg, s)[:2]
+    stage = world_model_stage(nb07.configs(cfg)["recipe"], tmp_path, tmp_path, None, None)
+    plan_in = nb07.plan_in
+    learner = solution("07_planning", "cem_update_impl", "cem_update")
+
+    class Refit:                                                       # a callable object that is falsy
+        calls = 0
+
+        def __len__(self):
+            return 0
+
+        def __call__(self, *args):
+            Refit.calls += 1
+            return learner(*args)
+
+    package_calls = []
+
+    def watch(frame, event, arg):
+        if event == "call" and frame.f_code is plan.cem_update.__code__:
+            package_calls.append(frame.f_code.co_name)
+
+    sys.setprofile(watch)
+    try:
+        mine = plan_in(stage, seeds, 3, s, update=Refit())
+    finally:
+        sys.setprofile(None)
+    assert Refit.calls == 3 * s.iters and package_calls == []       # 3 real steps, every refit the learner's
+    theirs = plan_in(stage, seeds, 3, s)                              # the package's refit, by default
+    np.testing.assert_allclose(mine.actions, theirs.actions, atol=1e-5)
+
+
 @pytest.mark.parametrize("test", list(checks.TESTS.values()), ids=list(checks.TESTS))
 def test_delegating_to_the_package_earns_nothing_and_says_why(test):
     module, name = test.reference.split(":")
