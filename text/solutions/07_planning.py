@@ -310,10 +310,12 @@ reconcile("ex4", *nb07.ex4_reconciliation(result))   # the words python -m pusht
 # Left, the actor: where its own dream says the block goes over the whole 10 s (purple, dashed),
 # against where it really goes (orange). Right, the planner: where the block really goes, and every
 # tenth real step the plan it chose, as the dream expected it, drawn from the true state of that step.
+# Below the picture, the actor read against two controls on all the starts: the same dream's zero
+# actions (did it learn a good policy even in the model?) and reality (did it exploit the model?).
 
 # %%
 show(nb07.fig_one_start(result), "07_one_start.png")
-display(Markdown(nb07.exploit_sentence(result, nb07.actor_gap(result.actor_dream, result.rollouts["actor"]))))
+display(Markdown(nb07.actor_sentence(result, cfg.imag_horizon)))
 display(Markdown(nb07.gate_predicted_sentence(result)))
 
 # %%
