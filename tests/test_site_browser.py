@@ -24,6 +24,7 @@ fresh smoke run. It is served on 127.0.0.1 and:
 from __future__ import annotations
 
 import functools
+import importlib.util
 import http.server
 import json
 import os
@@ -50,7 +51,7 @@ def site(tmp_path_factory) -> Path:
         html = Path(given).resolve()
         assert (html / "index.html").exists(), f"SITE_HTML={given} holds no built site (make site-smoke)"
         return html
-    if not Path(sys.executable).with_name("jupyter-book").exists():
+    if importlib.util.find_spec("jupyter_book") is None:
         skip_or_fail("Jupyter Book is not installed (make site-deps), and SITE_HTML names no built site")
     tmp = tmp_path_factory.mktemp("site")
     subprocess.run([sys.executable, "-m", "scripts.chapter", "--smoke", "--out", str(tmp / "run")], cwd=ROOT, check=True,
