@@ -264,3 +264,23 @@ def test_the_solution_refit_equals_the_package_on_random_cases():
         best = torch.stack([samples[b, idx[b]] for b in range(shape[0])])
         m, s = cem_update(samples, scores, 3, 0.05)
         assert torch.allclose(m, best.mean(1)) and torch.allclose(s, best.std(1, correction=0).clamp_min(0.05))
+
+
+def test_the_summary_table_reads_every_seed_it_finds(tmp_path):
+    import json
+
+    from pusht.nb.planning_measure import Rung  # noqa: F401
+
+    assert "No seed" in nb07.summary_table(tmp_path)
+    folder = tmp_path / "metrics" / "planning"
+    folder.mkdir(parents=True)
+    rs = ladder()
+    for seed in (10, 2):
+        res = result(planner=(-0.3, seed))
+        (folder / f"plan_seed{seed}.json").write_text(json.dumps(
+            nb07.as_json(rs, {}, res, type("C", (), {"seed": seed})(), nb07.settings(type("C", (), {"smoke": True})())),
+            default=float))
+    table = nb07.summary_table(tmp_path)
+    lines = [line for line in table.splitlines() if line.startswith("| ") and line[2].isdigit()]
+    assert [line.split(" | ")[0] for line in lines] == ["| 2", "| 10"]
+    assert "| 2 | fails | 0/30" in table and "2/30" in table and "(b) |" in table

@@ -86,6 +86,31 @@ def as_json(rungs: dict, census: dict, res: Ex4Result | None, cfg, s) -> dict:
     return out
 
 
+def summary_table(out) -> str:
+    """Every seed whose results this notebook wrote under ``out`` (``metrics/planning/plan_seed<N>.json``):
+    each world model's gate beside the planner's real outcome in it, and the actor's."""
+    import json
+    from pathlib import Path
+
+    files = sorted(Path(out, "metrics", "planning").glob("plan_seed*.json"), key=lambda p: int(p.stem[9:]))
+    rows = []
+    for path in files:
+        r = json.loads(path.read_text())
+        if "outcomes" not in r:
+            continue
+        o, g = r["outcomes"], r["gates"]
+        cell = {name: f"{x['successes']}/{x['n']} ({x['minus_zero']:+.3f} ± {x['minus_zero_se']:.3f})"
+                for name, x in o.items()}
+        rows.append(f"| {r['seed']} | {'passes' if g['chapter']['passed'] else 'fails'} | {cell['planner_chapter']} | "
+                    f"{'passes' if g['recipe']['passed'] else 'fails'} | {cell['planner']} | {cell['actor']} | "
+                    f"({r['letter']}) |")
+    if not rows:
+        return "*No seed's results found yet.*"
+    return ("| seed | gate, chapter's model | planner in it: solved (minus zero actions, reward/step) | gate, recipe's "
+            "model | planner in it | actor in it | Exercise 4 |\n| --- | --- | --- | --- | --- | --- | --- |\n"
+            + "\n".join(rows) + f"\n\n{len(rows)} seed(s) found in `{Path(out)}`.")
+
+
 # --- figures ---------------------------------------------------------------------------------------
 @figure
 def fig_drift(rungs: dict, dt: float = 0.1):

@@ -327,6 +327,16 @@ ask(SELF_CHECKS["replan"], "")
 print(f"saved {METRICS / f'plan_seed{cfg.seed}.json'}")
 
 # %% [markdown]
+# ## Every seed in your output folder
+#
+# One seed is one run. The table reads every seed's results this notebook wrote into `OUT`: run it
+# with another `SEED` into the same `OUT` (or `make claims`, which runs seeds 0-5) and the table
+# grows. Does the gate's reading go with the planner's outcome on every seed?
+
+# %%
+display(Markdown(nb07.summary_table(OUT)))
+
+# %% [markdown]
 # ## Read next
 #
 # * **PETS**: Chua et al. (2018), *Deep Reinforcement Learning in a Handful of Trials using
