@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -131,29 +132,71 @@ def _feedback_for(course: Path, students: list[str], answer: Path | None = None)
     return errors
 
 
+SUMMARY_TITLE = "What the grader found"
+
+
 def sanitize_feedback_sources(course: Path, report: dict) -> None:
-    """Before feedback: hidden tests out, each test's verdict in, long outputs cut."""
+    """Before feedback: hidden tests out, each test's verdict in (the first of its cell's outputs),
+    long outputs cut, the Colab install cell out (it does nothing but on Colab), and on top of the
+    page one cell that names each test that lost points with the grader's hint (:func:`summary_cell`)."""
     for student, rep in report.items():
         folder = course / "autograded" / student / ASSIGNMENT
         for path in folder.glob("*.ipynb"):
             nb = nbformat.read(path, as_version=4)
             nb.metadata.pop("widgets", None)
             budget = text_budget = FEEDBACK_NOTEBOOK_CHARS
+            verdicts = []
+            nb.cells = [c for i, c in enumerate(nb.cells) if i != install_cell_index(nb.cells)]
             for cell in nb.cells:
                 g = cellcode.gid(cell)
                 if cell.cell_type == "code" and "### BEGIN HIDDEN TESTS" in cell.source:
                     cell.source = _strip_hidden(cell.source)
                 text_budget = _cap_source(cell, text_budget)
+                verdict = None
                 if g in rep["verdicts"]:
                     score, max_score, msg = rep["verdicts"][g]
+                    verdicts.append((g, score, max_score, msg))
                     cell.outputs = _without_grader_lines(cell.get("outputs", []))
-                    cell.outputs.append(nbformat.v4.new_output("stream", name="stdout",
-                                        text=f"[grader] {g}: {score:g} of {max_score:g} points: {msg}\n"))
+                    verdict = nbformat.v4.new_output("stream", name="stdout",
+                                                     text=f"[grader] {g}: {score:g} of {max_score:g} points: {msg}\n")
                 if cell.cell_type == "code":
                     # widgets (progress bars) are live views with random ids: nothing in a static page
                     cell.outputs = _coalesce_streams([o for o in cell.get("outputs", []) if WIDGET not in o.get("data", {})])
+                    if verdict is not None:         # the grader's word first, above what the cell printed
+                        cell.outputs.insert(0, verdict)
                     budget = _cap_outputs(cell, budget)
+                elif verdict is not None:               # as before: what nbgrader's page does with it
+                    cell.outputs.append(verdict)
+            if verdicts:
+                nb.cells.insert(0, summary_cell(verdicts))
             nbformat.write(nb, path)
+
+
+def install_cell_index(cells) -> int | None:
+    """The Colab install cell's index (its first ungraded code cell that mentions ``google.colab``,
+    as scripts/release.py writes it), or None."""
+    return next((i for i, c in enumerate(cells) if c.cell_type == "code" and "google.colab" in c.source
+                 and not cellcode.gid(c)), None)
+
+
+_MARKDOWN_SPECIAL = re.compile(r"([\\`*_{}\[\]()#+\-.!|<>$~&])")
+
+
+def _plain(text: str) -> str:
+    """``text`` as markdown that shows it as it is (a hint may quote the student's exception)."""
+    return _MARKDOWN_SPECIAL.sub(r"\\\1", " ".join(text.split()))
+
+
+def summary_cell(verdicts) -> nbformat.NotebookNode:
+    """The page's first cell: each graded cell by its name (a link to it), its points, and for each
+    that lost points the grader's hint, so the one line a student needs comes first."""
+    lines = [f"## {SUMMARY_TITLE}", ""]
+    for g, score, max_score, msg in verdicts:
+        lost = score < max_score
+        lines.append(f"* [{_plain(g)}](#{g}): **{score:g} of {max_score:g} points**" + (f": {_plain(msg)}" if lost else ""))
+    if all(score >= max_score for _, score, max_score, _ in verdicts):
+        lines += ["", "Every test passed."]
+    return nbformat.v4.new_markdown_cell("\n".join(lines))
 
 
 def _without_grader_lines(outputs: list) -> list:

@@ -59,7 +59,10 @@ import nh3
 from jinja2 import pass_context
 from nbconvert.exporters import HTMLExporter, TemplateExporter
 from nbconvert.filters.highlight import Highlight2HTML
+from nbconvert.filters.markdown_mistune import IPythonRenderer, MarkdownWithMath
 from nbconvert.filters.widgetsdatatypefilter import WidgetsDataTypeFilter
+
+from .feedback_math import Formulas
 
 ALT_TEXT = "No description has been provided for this image"   # nbconvert's own words
 
@@ -328,17 +331,96 @@ def _edit_tags(html: str) -> tuple[str, int]:
     return "".join(out), missing_alt
 
 
+class _MathMLRenderer(IPythonRenderer):
+    """nbconvert's markdown renderer, each formula held for MathML instead of left as ``$...$``."""
+
+    def __init__(self, formulas: Formulas, **kw):
+        super().__init__(**kw)
+        self.formulas = formulas
+
+    def block_math(self, body: str) -> str:
+        return self.formulas.hold(body, display=True)
+
+    def inline_math(self, body: str) -> str:
+        return self.formulas.hold(body, display=False)
+
+    def latex_environment(self, name: str, body: str) -> str:
+        return self.formulas.hold(f"\\begin{{{name}}}{body}\\end{{{name}}}", display=True)
+
+
+# --- a page a student reads on a phone (issue 42) -------------------------------------------------
+# The template (nbgrader's, on nbconvert's classic) sets no viewport, so a phone lays it out 980 px
+# wide and shrinks it; its prompts take 21ex of a 390 px screen; its <pre> never wraps, so the
+# grader's hint ran off the screen. These rules come after the template's sheets.
+VIEWPORT = '<meta name="viewport" content="width=device-width, initial-scale=1">'
+PHONE_CSS = """<style type="text/css">
+body { font-size: 16px; line-height: 1.5; }
+.container { max-width: 100%; }
+div.output_area pre, div.output_subarea pre, div.output_text pre { white-space: pre-wrap; overflow-wrap: anywhere; }
+div.input_area pre, div.highlight pre { overflow-x: auto; }
+img { max-width: 100%; height: auto; }
+math[display="block"] { overflow-x: auto; overflow-y: hidden; padding: 0.2em 0; }
+.image-alt { font-style: italic; }
+@media (max-width: 767px) {
+  .container { padding-left: 6px; padding-right: 6px; }
+  div.prompt { display: none; }
+  div.inner_cell, div.output_subarea { max-width: 100%; }
+  div.input, div.output_area { flex-direction: column; }
+  div.nbgrader_cell .panel-heading { height: auto; }
+  .panel-body { padding: 6px; }
+}
+</style>
+"""
+# nbgrader's summary names a test "Test cell" (the label of every test): its name is its grade id,
+# which the same link carries
+_SUMMARY_LABEL = re.compile(r'<a href="#([^"<>]+)">(Test cell|Coding free-response|Written response|Task)</a>')
+_IMG = re.compile(r"<img\b([^>]*)>")
+
+
+def phone_page(page: str) -> str:
+    """The sanitised ``page`` made to read on a phone: a viewport and :data:`PHONE_CSS` in its head,
+    each test named in the summary, and an image with no source left (a remote one: Colab's and
+    Binder's badges) shown as its alternative text, so a badge link reads as a text link."""
+    head_end = page.find("</head>")
+    if head_end >= 0:
+        extra = ("" if 'name="viewport"' in page[:head_end] else VIEWPORT + "\n") + PHONE_CSS
+        page = page[:head_end] + extra + page[head_end:]
+
+    def named(m):
+        name = _html.escape(_html.unescape(m.group(1)))
+        return f'<a href="#{m.group(1)}">{m.group(2)}: <code>{name}</code></a>'
+
+    def image(m):
+        attrs = dict(_attrs(m.group(1)))
+        if "src" in attrs:
+            return m.group(0)
+        alt = _html.escape(_html.unescape(_unquote(attrs.get("alt"))), quote=False) or "an image"
+        return f'<span class="image-alt">{alt}</span>'
+    body = page.find("<body")
+    return page[:body] + _IMG.sub(image, _SUMMARY_LABEL.sub(named, page[body:]))
+
+
 class FeedbackHTMLExporter(HTMLExporter):
     """``HTMLExporter`` (same configuration, template and filters) whose page runs no script: the
     notebook's JavaScript and widgets become notes, the page is sanitised and carries a policy that
     forbids scripts (:func:`safe_page`); its accessibility edits are made on the page's tags instead
     of through a BeautifulSoup round trip."""
 
+    _formulas: Formulas | None = None
+
     @pass_context
     def markdown2html(self, context, source):
-        """Markdown rendered as nbconvert renders it (its raw HTML included), then sanitised on its
-        own: a cell's markup stays inside the cell."""
-        return sanitize_fragment(super().markdown2html(context, source))
+        """Markdown rendered as nbconvert renders it (its raw HTML included), its math held as
+        placeholders for MathML (:mod:`autograde.feedback_math`), then sanitised on its own: a
+        cell's markup stays inside the cell."""
+        cell = context.get("cell", {})
+        renderer = _MathMLRenderer(
+            self._formulas if self._formulas is not None else Formulas(),
+            escape=False, attachments=cell.get("attachments", {}), embed_images=self.embed_images,
+            path=context.get("resources", {}).get("metadata", {}).get("path", ""),
+            anchor_link_text=self.anchor_link_text, exclude_anchor_links=self.exclude_anchor_links,
+            **self.lexer_options)
+        return sanitize_fragment(MarkdownWithMath(renderer=renderer).render(source))
 
     def _preprocess(self, nb, resources):
         # after nbconvert's own copy and the configured preprocessors (nbgrader's GetGrades...)
@@ -356,8 +438,13 @@ class FeedbackHTMLExporter(HTMLExporter):
         self.register_filter("filter_data_type",
                              WidgetsDataTypeFilter(notebook_metadata=self._nb_metadata, parent=self,
                                                    resources=resources))
-        html, resources = TemplateExporter.from_notebook_node(self, nb, resources, **kw)
-        html, missing_alt = _edit_tags(safe_page(html))
+        self._formulas = Formulas()                 # a new secret for each page
+        try:
+            html, resources = TemplateExporter.from_notebook_node(self, nb, resources, **kw)
+            html, missing_alt = _edit_tags(phone_page(safe_page(html)))
+            html = self._formulas.put_back(html)
+        finally:
+            self._formulas = None
         if missing_alt:
             self.log.warning("Alternative text is missing on %s image(s).", missing_alt)
         return html, resources

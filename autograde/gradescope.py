@@ -125,7 +125,8 @@ NOT_NEEDED = re.compile(r"^autograde/(classes/|manual_grade\.py$|dask_preload\.p
 # from before the course folder left autograde/ (no longer ignored by git there).
 NOT_VENDORED = re.compile(r"(^|/)(__pycache__|\.ipynb_checkpoints)(/|$)|\.pyc$")
 # what grading imports (autograde/, pusht/, the notebooks' kernels), by their requirements.txt names
-GRADING_PACKAGES = ("torch", "pymunk", "numpy", "matplotlib", "tqdm", "pyyaml", "ipykernel", "nbgrader", "nh3")
+GRADING_PACKAGES = ("torch", "pymunk", "numpy", "matplotlib", "tqdm", "pyyaml", "ipykernel", "nbgrader", "nh3",
+                    "latex2mathml")
 PYTHON = "3.11"                       # as CI runs it (nbgrader 0.9.6 needs 3.11 or newer)
 UV = "0.13.9"                         # installs that Python on Gradescope's image (PyPI)
 TORCH_INDEX = "https://download.pytorch.org/whl/cpu"

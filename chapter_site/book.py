@@ -15,6 +15,7 @@ another host.
 from __future__ import annotations
 
 import argparse
+import ast
 import re
 import json
 import shutil
@@ -31,10 +32,18 @@ from . import landing, provenance
 ROOT = Path(__file__).resolve().parents[1]
 BOOK = ROOT / "book"
 RELEASE = ROOT / "notebooks"
+JUPYTER_BOOK = "import sys; from jupyter_book.cli.main import main; sys.argv[0] = 'jupyter-book'; main()"
 REVEALS = ("run_exercise(", "reconcile(")      # a cell that runs an exercise or reconciles it
 # A stylesheet an HTML output pulls from another host: matplotlib's animation player links
 # Font Awesome 4 from a CDN. The site's theme ships Font Awesome itself, and the site loads nothing
 # from elsewhere, so such a link is dropped from the published page (the notebook keeps it).
+# Plumbing (issue 42, item 4). A notebook page shows the lesson: the Colab install cell, which does
+# nothing anywhere but Colab, is left out of the page (``remove-cell``; the page opens with a Colab
+# link instead), and a cell that only calls the notebook's helpers to show something (a sentence
+# from the package, the package's code, a self-check's question, an exercise's reconciliation)
+# keeps its output with its code folded (``hide-input``: a <details>, which opens with JavaScript
+# off too). A cell with any other statement shows its code: that is the code being taught.
+HELPERS = frozenset({"display", "reconcile", "time_note", "ask"})
 FOREIGN_STYLESHEET = re.compile(r"<link[^>]*href=[\"']https?://[^>]*>", re.IGNORECASE)
 
 
@@ -42,16 +51,47 @@ def _grade_id(cell) -> str | None:
     return cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
 
 
+def is_install_cell(cell) -> bool:
+    """The Colab install cell: a code cell that mentions ``google.colab`` (scripts/release.py writes it)."""
+    return cell.cell_type == "code" and "google.colab" in cell.source
+
+
+def is_helper_cell(cell) -> bool:
+    """A code cell whose every statement is an import or a call of one of :data:`HELPERS`
+    (``display(Markdown(nb04.exploitation_text(...)))``, ``reconcile("ex1", ...)``)."""
+    if cell.cell_type != "code" or not cell.source.strip():
+        return False
+    try:
+        body = ast.parse(cell.source).body
+    except SyntaxError:            # IPython magics: not a helper call
+        return False
+    calls = [s for s in body if not isinstance(s, (ast.Import, ast.ImportFrom))]
+    return bool(calls) and all(isinstance(s, ast.Expr) and isinstance(s.value, ast.Call)
+                               and isinstance(s.value.func, ast.Name) and s.value.func.id in HELPERS
+                               for s in calls)
+
+
+def _tag(cell, tag: str) -> None:
+    tags = cell.metadata.setdefault("tags", [])
+    if tag not in tags:
+        tags.append(tag)
+
+
 def publishable(executed: Path, release: Path) -> nbformat.NotebookNode:
     """The executed instructor notebook with each graded cell's source replaced by the student
     release's (matched by nbgrader's ``grade_id``), a Colab link on top, the reveals folded, and
-    papermill's injected parameters (the run's own paths) left out."""
+    papermill's injected parameters (the run's own paths) left out; the install cell is removed and
+    the helper cells' code folded (:data:`HELPERS`)."""
     nb = nbformat.read(executed, as_version=4)
     student = {_grade_id(c): c for c in nbformat.read(release, as_version=4).cells if _grade_id(c)}
     cells = []
     for cell in nb.cells:
         if "injected-parameters" in cell.get("metadata", {}).get("tags", []):
             continue                  # papermill's cell: the run's own paths, not the learner's notebook
+        if is_install_cell(cell):
+            _tag(cell, "remove-cell")
+        elif is_helper_cell(cell):
+            _tag(cell, "hide-input")
         gid = _grade_id(cell)
         if gid:
             if gid not in student:
@@ -59,9 +99,9 @@ def publishable(executed: Path, release: Path) -> nbformat.NotebookNode:
                                  f"{release}; run make release")
             cell.source = student[gid].source
             if cell.cell_type == "code" and cell.get("outputs"):
-                cell.metadata.setdefault("tags", []).append("hide-output")
+                _tag(cell, "hide-output")
         elif cell.cell_type == "code" and any(r in cell.source for r in REVEALS):
-            cell.metadata.setdefault("tags", []).append("hide-output")
+            _tag(cell, "hide-output")
         for output in cell.get("outputs", []):
             html = output.get("data", {}).get("text/html")
             if html:
@@ -122,8 +162,9 @@ def build(run: Path, out: Path) -> dict:
     build_dir = out / "jb"
     if build_dir.exists():
         shutil.rmtree(build_dir)
-    jb = Path(sys.executable).with_name("jupyter-book")
-    cmd = [str(jb), "build", str(src), "--path-output", str(build_dir), "--quiet"]
+    # Jupyter Book's command through this interpreter, not its script in bin/: a venv made or moved
+    # elsewhere leaves the script's first line naming a Python that no longer exists
+    cmd = [sys.executable, "-c", JUPYTER_BOOK, "build", str(src), "--path-output", str(build_dir), "--quiet"]
     done = subprocess.run(cmd, capture_output=True, text=True)
     if done.returncode != 0:
         raise SystemExit(f"jupyter-book failed ({done.returncode}):\n{done.stdout[-4000:]}\n{done.stderr[-4000:]}")

@@ -1,4 +1,4 @@
-"""A Sphinx extension for the chapter site's build (book/_config.yml lists it). Three fixes:
+"""A Sphinx extension for the chapter site's build (book/_config.yml lists it). Five fixes:
 
 * Jupyter Book 1 always loads sphinx-thebe, whose start-up script then lands twice in every
   notebook page (the browser reports "Identifier 'THEBE_JS_URL' has already been declared"). The
@@ -10,6 +10,12 @@
   JavaScript off) and as a 1.5 MB script that redraws each icon as SVG, 60% of the landing page's
   weight. Every icon the site uses is in the font, so the script's tag is taken out of every page
   and the script out of the build (:func:`drop_fontawesome_script`).
+* A notebook's figures are PNGs of 1,000-2,000 px drawn about 360 px wide on a phone, where their
+  text is 3 px. Each figure in a notebook's output is wrapped in a link to its own full-resolution
+  file (:func:`enlargeable_figures`): a tap opens it, to be zoomed, with JavaScript off too.
+* With JavaScript off, the theme hides what needs it (``.pst-js-only``, in a ``<noscript>`` style),
+  but not its sidebar toggles, its full-screen button, its back-to-top pill or matplotlib's
+  animation player, which are then dead buttons: the same rule hides them too (:data:`NEEDS_SCRIPT`).
 """
 
 from __future__ import annotations
@@ -18,6 +24,12 @@ import re
 from pathlib import Path
 
 FONTAWESOME_JS = "_static/scripts/fontawesome.js"
+# what does nothing without JavaScript, hidden with the theme's own rule when it is off
+NEEDS_SCRIPT = (".sidebar-toggle", ".btn-fullscreen-button", "#pst-back-to-top", ".animation")
+_NOSCRIPT_RULE = ".pst-js-only { display: none !important; }"
+# an output figure as MyST-NB writes it: <img alt="../_images/<hash>.png" src="../_images/<hash>.png" />
+_OUTPUT_IMAGE = re.compile(r'<img alt="([^"]*)" src="(\.\./_images/[^"]+)" />')
+ENLARGE_TEXT = "Open the figure at full size"
 _FONTAWESOME_TAG = re.compile(r'[ \t]*<script[^>]*src="[^"]*_static/scripts/fontawesome\.js[^"]*"[^>]*></script>\n?')
 
 
@@ -49,9 +61,36 @@ def drop_fontawesome_script(outdir: Path) -> int:
     return changed
 
 
+def enlargeable_figures(html: str) -> str:
+    """Each notebook output figure in ``html`` wrapped in a link to its own file, titled so."""
+    return _OUTPUT_IMAGE.sub(lambda m: f'<a class="figure-full" href="{m.group(2)}" title="{ENLARGE_TEXT}">'
+                                       f'<img alt="{m.group(1)}" src="{m.group(2)}" /></a>', html)
+
+
+def no_dead_buttons(html: str) -> str:
+    """The theme's rule for JavaScript off (``.pst-js-only`` hidden) extended to :data:`NEEDS_SCRIPT`."""
+    return html.replace(_NOSCRIPT_RULE, ", ".join((".pst-js-only",) + NEEDS_SCRIPT) + " { display: none !important; }")
+
+
+def finish_pages(outdir: Path) -> int:
+    """The edits made to every built page: figures enlargeable (notebook pages), no dead button
+    with JavaScript off. Returns the pages changed."""
+    changed = 0
+    for page in Path(outdir).rglob("*.html"):
+        text = page.read_text(encoding="utf-8")
+        new = no_dead_buttons(text)
+        if page.parent.name == "notebooks":
+            new = enlargeable_figures(new)
+        if new != text:
+            page.write_text(new, encoding="utf-8")
+            changed += 1
+    return changed
+
+
 def _after_build(app, exception):
     if exception is None and app.builder.format == "html":
         drop_fontawesome_script(Path(app.outdir))
+        finish_pages(Path(app.outdir))
 
 
 def setup(app):

@@ -1,4 +1,4 @@
-"""``make claims``: run notebooks 03-06 on seeds 0-9 and record every claim they evaluated.
+"""``make claims``: run notebooks 03-07 on seeds 0-9 and record every claim they evaluated.
 
     python -m scripts.claims [--seeds 0 1 2 3 4 5 6 7 8 9] [--out runs/claims] [--smoke] [--record]
 
@@ -37,7 +37,7 @@ from scripts.chapter import ROOT, execute
 from pusht.host import cpu_model
 from pusht.nb.claims import LOG_ENV, conflicts, load_all
 
-NOTEBOOKS = ("03_imagination_actor", "04_imagination_gap", "05_horizon", "06_closing_the_gap")
+NOTEBOOKS = ("03_imagination_actor", "04_imagination_gap", "05_horizon", "06_closing_the_gap", "07_planning")
 
 
 def host() -> str:
@@ -150,6 +150,7 @@ def main(argv=None) -> int:
             print(f"  {seconds[f'{name}_seed{seed}']:.0f} s", flush=True)
     os.environ.pop(LOG_ENV, None)
     rows = collect(logs)
+    seeds = sorted({r["seed"] for r in rows})      # the kept logs' seeds too: a table of every run in it
     # A run of some notebooks keeps the other notebooks' logs (and their times) from the run before:
     # the table says which were run this time.
     before = json.loads((out / "claims.json").read_text()) if (out / "claims.json").is_file() else {}
@@ -157,7 +158,7 @@ def main(argv=None) -> int:
             if k not in seconds and (logs / f"{k}.jsonl").is_file()}
     table = {"written_by": "scripts/claims.py (make claims)", "host": host(), "commit": commit(),
              "measured_at": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-             "config": "smoke" if args.smoke else "default", "seeds": args.seeds,
+             "config": "smoke" if args.smoke else "default", "seeds": seeds, "seeds_run_this_time": args.seeds,
              "notebooks": sorted({r["notebook"] for r in rows}), "run_this_time": args.notebooks,
              "kept_from": ({"commit": before.get("commit"), "measured_at": before.get("measured_at"), "runs": sorted(kept)}
                            if kept else None),
@@ -175,7 +176,7 @@ def main(argv=None) -> int:
           "it). `k/n true`: evaluated n times for that seed (per seed compared, horizon, round or fix), "
           "held k times. `-`: not evaluated for that seed. The control: for a causal claim, the run that differs "
           "from the claimed cause's run only in that cause (`pusht.nb.claims.CONTROLS`).\n\n"
-          + matrix(rows, args.seeds) + "\n\n" + letters_section(rows) + "\n\n" + one_test_section(rows) + "\n")
+          + matrix(rows, seeds) + "\n\n" + letters_section(rows) + "\n\n" + one_test_section(rows) + "\n")
     (out / "claims.md").write_text(md)
     print(md)
     if args.record:

@@ -8,10 +8,15 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def reward_handin(extra_cells=(), source_padding: str = "", markdown: str = "") -> dict:
+# a plausible mistake: the reward read off the normalised observation, never put back into metres
+FORGOT_TO_UNNORMALISE = ("obs = norm_obs * std + mean", "obs = norm_obs")
+
+
+def reward_handin(extra_cells=(), source_padding: str = "", markdown: str = "", edit=None) -> dict:
     """02_reward as a student who solved it hands it in (outputs none: it was not run), with
     ``extra_cells`` (code) right after its test cell, ``source_padding`` (a comment) at the end of
-    the solution cell, and ``markdown`` as a last markdown cell."""
+    the solution cell, and ``markdown`` as a last markdown cell. ``edit``: an ``(old, new)`` pair
+    replaced in the solution (``FORGOT_TO_UNNORMALISE``: a wrong answer)."""
     rel = json.loads((ROOT / "notebooks" / "02_reward.ipynb").read_text())
     sol = json.loads((ROOT / "solutions" / "02_reward.ipynb").read_text())
 
@@ -20,6 +25,9 @@ def reward_handin(extra_cells=(), source_padding: str = "", markdown: str = "") 
 
     src = next("".join(c["source"]) for c in sol["cells"] if gid(c) == "reward_impl")
     src = "".join(line for line in src.splitlines(keepends=True) if line.strip() not in ("### BEGIN SOLUTION", "### END SOLUTION"))
+    if edit is not None:
+        assert edit[0] in src, f"{edit[0]!r} is not in the solution"
+        src = src.replace(edit[0], edit[1])
     at = next(i for i, c in enumerate(rel["cells"]) if gid(c) == "reward_impl_tests")
     for c in rel["cells"]:
         if gid(c) == "reward_impl":
@@ -30,6 +38,11 @@ def reward_handin(extra_cells=(), source_padding: str = "", markdown: str = "") 
     if markdown:
         rel["cells"].append({"cell_type": "markdown", "id": "extra-md", "metadata": {}, "source": markdown})
     return rel
+
+
+def unsolved_handin() -> dict:
+    """02_reward handed in as released: nothing written, so every test fails (an incomplete hand-in)."""
+    return json.loads((ROOT / "notebooks" / "02_reward.ipynb").read_text())
 
 
 def write_class(folder: Path, students: dict) -> Path:

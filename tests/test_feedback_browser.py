@@ -40,6 +40,8 @@ from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook, new_outp
 
 from autograde import feedback_html
 from autograde.feedback_html import ALT_TEXT, CSP, CSP_META, NOTE_JAVASCRIPT, FeedbackHTMLExporter
+from autograde.feedback_math import ATTRIBUTES as MATHML_ATTRIBUTES
+from autograde.feedback_math import TAGS as MATHML_TAGS
 from browser_support import chromium
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -112,6 +114,9 @@ MARKDOWN = {      # name: a markdown cell's source
     "md-breakout": f"</div></div></div></main></body></html><script>{js('md-breakout')}</script>",
     "md-encodings": "+ADw-script+AD4-alert(1)+ADw-/script+AD4- &lt;script&gt;alert(1)&lt;/script&gt;",
     "md-attachments": "![svg](attachment:evil.svg) ![png](attachment:quote.png) ![html](attachment:page.html)",
+    # LaTeX becomes MathML when the page is made (autograde/feedback_math.py): no link, style or markup gets through
+    "md-latex": f"$\\href{{javascript:{js('md-latex-href')}}}{{x}}$ and "
+                "$$\\style{background:url(https://pwned.invalid/md-latex.png)}{y} \\text{</math><img src=x>}$$",
     "md-mermaid": f"```mermaid\ngraph TD\nA[\"</pre><img src=x onerror={js('md-mermaid')}>\"]\n```",
 }
 ATTACHMENTS = {
@@ -238,7 +243,7 @@ class Tags(HTMLParser):
 
 
 FORBIDDEN_TAGS = {"script", "iframe", "frame", "frameset", "object", "embed", "applet", "base", "form", "link",
-                  "svg", "math", "template", "portal", "button", "textarea", "select", "video", "audio",
+                  "svg", "template", "portal", "button", "textarea", "select", "video", "audio",
                   "source", "marquee", "noscript", "input"}
 
 
@@ -252,6 +257,8 @@ def markup_problems(page: str) -> list[str]:
             head = False
         if tag in FORBIDDEN_TAGS or (tag == "style" and not head):
             problems.append(f"<{tag}>")
+        if tag in MATHML_TAGS and set(attrs) - MATHML_ATTRIBUTES:
+            problems.append(f"<{tag} {sorted(set(attrs) - MATHML_ATTRIBUTES)}>")
         if tag == "meta" and set(attrs) - {"charset", "name", "content"} and attrs.get("http-equiv") != \
                 "Content-Security-Policy":
             problems.append(f"<meta {attrs}>")
@@ -287,8 +294,10 @@ def test_no_payload_survives_as_markup(pages, template):
 def test_the_honest_parts_still_show(pages, template):
     page, _ = pages[template]
     parsed = Tags(page)
-    for honest in HONEST:               # heading, code, printed text, LaTeX as text, a table's cell
+    for honest in HONEST[:3] + HONEST[4:]:      # heading, code, printed text, a table's cell
         assert honest in parsed.text, honest
+    # the LaTeX, drawn as MathML where the page is made (ours; nbconvert's templates leave $...$)
+    assert "\u03b1" in parsed.text and {"math", "msup", "mi"} <= {t for t, _ in parsed.tags}
     assert any(t == "img" and a.get("src") == f"data:image/png;base64,{PNG}" and a.get("alt") == ALT_TEXT
                for t, a in parsed.tags)
     assert {"h1", "table", "td"} <= {t for t, _ in parsed.tags}
@@ -428,3 +437,72 @@ def test_the_checks_see_payloads_run_on_an_unsanitised_page(browser, tmp_path):
     # the plainest routes, which any browser runs
     assert {"md-script", "md-img-onerror", "out-html-script", "out-html-img", "out-javascript"} <= ran
     assert {"md-link.css", "md-remote.png", "md-srcset.png"} <= fetched       # markup alone fetches too
+
+
+# --- three real feedback pages, as a student opens them (issue 42, item 7): a lane ----------------
+HANDINS = ("perfect", "wrong", "incomplete")
+PAGE_CASES = [(s, w, scheme, j) for s in HANDINS for w in (390, 1280) for scheme in ("light", "dark") for j in (True, False)]
+
+
+@pytest.fixture(scope="module")
+def feedback_pages(tmp_path_factory):
+    """02_reward graded for a student who solved it, one who forgot to de-normalise and one who
+    handed in the release as it was (tests/handins.py), by the real grader and nbgrader; their
+    pages. Unconfined: the hand-ins are this test's own, and the pages are what is tested here."""
+    from autograde import grade
+    from autograde.course import ASSIGNMENT
+    from handins import FORGOT_TO_UNNORMALISE, reward_handin, unsolved_handin, write_class
+
+    tmp = tmp_path_factory.mktemp("feedback-lane")
+    subs = write_class(tmp / "class", {"perfect": reward_handin(), "wrong": reward_handin(edit=FORGOT_TO_UNNORMALISE),
+                                       "incomplete": unsolved_handin()})
+    (tmp / "course").mkdir()
+    grade.grade_class(subs, tmp / "course", timeout=120, log=lambda *a: None, progress=False, confine=False)
+    return {s: tmp / "course" / "feedback" / s / ASSIGNMENT / "02_reward.html" for s in HANDINS}
+
+
+@pytest.mark.lane
+@pytest.mark.parametrize("student,px,scheme,js", PAGE_CASES,
+                         ids=[f"{s}-{w}-{c}-{'js' if j else 'nojs'}" for s, w, c, j in PAGE_CASES])
+def test_a_feedback_page_reads_on_a_phone_and_a_desktop(browser, feedback_pages, student, px, scheme, js):
+    """At 390 px (a phone: its viewport honoured) and 1280 px, light and dark, JavaScript on and
+    off: no console message, no request but the page itself, no text under 10 px, nothing wider than
+    the screen, no image left undrawn (the badges are text links), no LaTeX source and no install
+    cell; the summary names the test, and a student who lost points reads the grader's hint on the
+    first screen. Screenshots (the wrong hand-in's at 390 px above all) go to $LANE_ARTIFACTS."""
+    from browser_support import PAGE_MEASURE
+
+    path = feedback_pages[student]
+    assert path.is_file(), f"no feedback page for {student}"
+    phone = px < 600
+    ctx = browser.new_context(viewport={"width": px, "height": 800}, color_scheme=scheme, java_script_enabled=js,
+                              is_mobile=phone, has_touch=phone)
+    page = ctx.new_page()
+    seen = {"console": [], "requests": []}
+    page.on("console", lambda m: seen["console"].append(f"{m.type}: {m.text}"))
+    page.on("request", lambda r: seen["requests"].append(r.url))
+    page.goto(path.as_uri(), wait_until="load")
+    m = page.evaluate(PAGE_MEASURE)
+    text = page.inner_text("body")
+    hint = page.locator("li", has_text="reward_impl_tests").first
+    hint_bottom = hint.evaluate("e => e.getBoundingClientRect().bottom") if hint.count() else None
+    undrawn = page.evaluate("() => [...document.images].filter(i => !(i.complete && i.naturalWidth > 0)).length")
+    maths = page.locator("math").count()
+    artifacts = Path(os.environ.get("LANE_ARTIFACTS") or path.parent)
+    artifacts.mkdir(parents=True, exist_ok=True)
+    if js:
+        page.screenshot(path=str(artifacts / f"feedback_{student}_{px}_{scheme}.png"))
+        if student == "wrong" and phone:
+            page.screenshot(path=str(artifacts / f"feedback_{student}_{px}_{scheme}_full.png"), full_page=True)
+    ctx.close()
+    assert seen["console"] == [] and seen["requests"] == [path.as_uri()], seen
+    assert m["smallest"][0][0] >= 10, m["smallest"]
+    assert m["page_overflow"] <= 1 and not m["wide"], (m["page_overflow"], m["wide"])
+    assert undrawn == 0 and "google.colab" not in text and "$$" not in text
+    assert "What the grader found" in text and "reward_impl_tests" in text and "Test cell: reward_impl_tests" in text
+    assert "Open In Colab" in text and maths == 0          # 02_reward has no formula; 03's: tests/test_feedback_math.py
+    if student == "perfect":
+        assert "4 of 4 points" in text and "Every test passed." in text
+    else:
+        assert "0 of 4 points" in text and "first failure: check 1" in text
+        assert hint_bottom is not None and hint_bottom <= 800, f"the hint ends at {hint_bottom} px"

@@ -13,7 +13,9 @@ from nbconvert.exporters import HTMLExporter
 from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook, new_output
 from traitlets.config import Config
 
-from autograde.feedback_html import ALT_TEXT, CSP, FeedbackHTMLExporter, _edit_tags
+from autograde.feedback_html import ALT_TEXT, CSP, PHONE_CSS, FeedbackHTMLExporter, _edit_tags
+
+PHONE_STYLE = PHONE_CSS.split(">", 1)[1].rsplit("</style>", 1)[0].strip()
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -72,26 +74,38 @@ def comparable(page: str, ours: bool) -> BeautifulSoup:
     policy would block them), the whitespace between elements and in ``style`` attributes, what the
     head's sheets would fetch (``url(...)``, ``none`` in ours);
     a second ``<body>`` (nbgrader's template nests nbconvert's body in its own, which a browser
-    merges into the first) is unwrapped. Ours must start its head with the policy, which goes too."""
+    merges into the first) is unwrapped. Ours must start its head with the policy, which goes too,
+    and may add a viewport and the phone's sheet (``phone_page``), which go too; the image that is
+    not embedded shows as its alternative text in ours, and so it is made in theirs."""
     soup = BeautifulSoup(page, "html.parser")
     if ours:
         policy = soup.head.find(True)
         assert (policy.name, policy.get("http-equiv"), policy.get("content")) == \
             ("meta", "Content-Security-Policy", CSP), policy
         policy.extract()
+        for style in soup.head.find_all("style"):
+            if style.string and style.string.strip() == PHONE_STYLE:
+                style.extract()
+    for meta in soup.head.find_all("meta", attrs={"name": "viewport"}):
+        meta.extract()
     for body in soup.find_all("body")[1:]:
         body.unwrap()
     for element in soup.find_all(["script", "style"]):
         if element.name == "script" or element.find_parent("head") is None:
             element.extract()
-    for img in soup.find_all("img", src=True):
-        if not img["src"].startswith("data:image/"):
-            del img["src"]
+    for img in soup.find_all("img"):
+        if not img.get("src", "").startswith("data:image/"):
+            alt = soup.new_tag("span", attrs={"class": "image-alt"})
+            alt.string = img.get("alt") or "an image"
+            img.replace_with(alt)
     for text in soup.find_all(string=True):
         if isinstance(text, Comment) or (not isinstance(text, Doctype) and not text.strip()):
             text.extract()
     for style in soup.head.find_all("style"):
         style.string = re.sub(r"url\([^)]*\)|\bnone\b", "", style.string or "")
+    for a in soup.find_all("a", href=True):          # ours names each test in nbgrader's summary
+        if ours and a.code and a.get_text().split(":")[0] in SUMMARY_LABELS:
+            a.string = a.get_text().split(":")[0]
     for element in soup.find_all(style=True):        # the sanitiser writes declarations without spaces
         element["style"] = re.sub(r"\s+", "", element["style"]).rstrip(";")
     return soup
@@ -118,9 +132,18 @@ def test_the_page_is_nbconverts_document_made_safe(template):
     assert re.search(r'<span style="color: ?rgb\(255, ?135, ?0\)">colour 208</span>', ours)   # ANSI colour 208
 
 
-def test_the_chapters_own_notebooks_give_nbconverts_documents_made_safe():
-    """Every markdown cell and answer of the six notebooks, through nbgrader's template (their
-    graded cells given a score and a comment, as GetGrades gives them)."""
+SUMMARY_LABELS = {"Test cell", "Coding free-response", "Written response", "Task"}
+
+
+def test_the_chapters_own_notebooks_give_nbconverts_documents_made_safe(monkeypatch):
+    """Every markdown cell and answer of the notebooks, through nbgrader's template (their graded
+    cells given a score and a comment, as GetGrades gives them). Their math is compared as
+    nbconvert leaves it (``$...$``): ours draws it as MathML (tests/test_feedback_math.py)."""
+    from nbconvert.filters.markdown_mistune import IPythonRenderer
+
+    from autograde.feedback_html import _MathMLRenderer
+    for name in ("block_math", "inline_math", "latex_environment"):
+        monkeypatch.setattr(_MathMLRenderer, name, getattr(IPythonRenderer, name))
     config = exporter_config("feedback")
     for path in sorted((ROOT / "solutions").glob("*.ipynb")):
         nb = nbformat.read(path, as_version=4)

@@ -149,6 +149,32 @@ def test_batched_planning_gives_the_actions_of_one_start_at_a_time(tiny_model, w
     np.testing.assert_allclose(alone.actions[:, 0], batched.actions[:, 1], atol=1e-5)
 
 
+def test_the_tolerance_objective_weighs_distance_and_angle_by_the_success_test(tiny_model):
+    from pusht.env import SUCCESS_ANG, SUCCESS_POS
+    from pusht.plan import dream_scores
+    from pusht.reward import reward_from_obs
+
+    wm, mean, std = tiny_model
+    g = torch.Generator().manual_seed(0)
+    h, z = wm._init(5)
+    obs0 = torch.randn(5, 6, generator=g)
+    z = wm.filter_step(h, obs0)
+    actions = torch.rand(5, 4, 2, generator=g) * 2 - 1
+    with torch.no_grad():
+        hh, zz, outs = h, z, []
+        for t in range(4):
+            hh, zz = wm.img_step(hh, zz, actions[:, t])
+            outs.append(wm.decode(hh, zz))
+        r, pos, ang = reward_from_obs(wm.accumulate(torch.stack(outs), obs0), mean, std)
+        torch.testing.assert_close(dream_scores(wm, h, z, obs0, actions, mean, std), r.mean(0))
+        torch.testing.assert_close(dream_scores(wm, h, z, obs0, actions, mean, std, "tolerance"),
+                                   -(pos / SUCCESS_POS + ang / SUCCESS_ANG).mean(0))
+    seeds = start_seeds(EVAL_SEED_BASE, 0, 2)
+    a = plan_rollout(wm, seeds, 3, mean, std, TINY)
+    b = plan_rollout(wm, seeds, 3, mean, std, dataclasses.replace(TINY, objective="tolerance"))
+    assert not np.array_equal(a.actions, b.actions)
+
+
 def test_the_recipe_and_its_smoke_are_valid_configs():
     for recipe, smoke in ((RECIPE, False), (SMOKE_RECIPE, True)):
         cfg = make_config(smoke=smoke, **recipe)
@@ -162,6 +188,7 @@ def test_the_recipe_and_its_smoke_are_valid_configs():
     (dict(samples=0), "samples must be a whole number, at least 1"),
     (dict(init_std=0.0), "init_std must be in (0, 2]"),
     (dict(window=-1), "window must be a whole number, 0 or more"),
+    (dict(objective="success"), "objective must be one of ('reward', 'tolerance')"),
 ])
 def test_plan_settings_are_validated(change, message):
     with pytest.raises(ValueError) as e:

@@ -156,6 +156,51 @@ def test_published_pages_show_the_student_code_and_no_solution(tmp_path):
         assert landing.colab_url(nb_path.name) in text
 
 
+def test_published_pages_show_no_plumbing(tmp_path):
+    """Issue 42, item 4: on every notebook's page the Colab install cell is removed and each cell
+    that only calls a helper to show something (display(Markdown(...)), reconcile(...)) has its
+    code folded, its output kept; a cell with code being taught is left as it is."""
+    from chapter_site.book import is_helper_cell
+
+    for nb_path in sorted((ROOT / "solutions").glob("*.ipynb")):
+        page = publishable(nb_path, ROOT / "notebooks" / nb_path.name)
+        code = [c for c in page.cells if c.cell_type == "code"]
+        install = [c for c in code if "google.colab" in c.source]
+        assert len(install) == 1 and "remove-cell" in install[0].metadata["tags"], nb_path.name
+        folded = [c for c in code if "hide-input" in c.metadata.get("tags", [])]
+        assert folded, f"{nb_path.name}: no helper cell folded"
+        assert all(is_helper_cell(c) and not c.metadata.get("nbgrader") for c in folded)
+        for c in code:
+            if "display(Markdown(" in c.source and c.source.lstrip().startswith("display(") and "\n" not in c.source.strip():
+                assert "hide-input" in c.metadata["tags"], (nb_path.name, c.source)
+            if "def " in c.source or "raise NotImplementedError" in c.source:
+                assert "hide-input" not in c.metadata.get("tags", []), (nb_path.name, c.source[:60])
+
+
+def test_helper_cells_are_told_from_code_being_taught():
+    from chapter_site.book import is_helper_cell
+
+    def cell(src):
+        return nbformat.v4.new_code_cell(src)
+    assert is_helper_cell(cell('display(Markdown(nb04.exploitation_text(m)))'))
+    assert is_helper_cell(cell('from pusht.nb.timing import time_note\n\ntime_note("04")  # how long'))
+    assert is_helper_cell(cell('display(Code(inspect.getsource(f)))\nreconcile("ex3", *nb06.ex3_reconciliation(r))'))
+    assert not is_helper_cell(cell('fig = nb01.fig_starts()\nshow(fig, "01.png")\ndisplay(Markdown(t))'))
+    assert not is_helper_cell(cell('import torch'))                 # an import alone shows nothing
+    assert not is_helper_cell(cell('%time display(x)'))             # a magic: not plain Python
+    assert not is_helper_cell(cell('nb.display(x)'))                # someone else's display
+
+
+def test_figures_link_to_their_full_size_and_no_button_is_dead_without_script():
+    from chapter_site.sphinx_ext import NEEDS_SCRIPT, enlargeable_figures, no_dead_buttons
+
+    img = '<img alt="../_images/ab12.png" src="../_images/ab12.png" />'
+    out = enlargeable_figures(f"<div class=\"cell_output\">{img}</div>")
+    assert f'<a class="figure-full" href="../_images/ab12.png" title="Open the figure at full size">{img}</a>' in out
+    page = "<noscript><style>.pst-js-only { display: none !important; }</style></noscript>"
+    assert all(sel in no_dead_buttons(page) for sel in NEEDS_SCRIPT)
+
+
 def test_landing_numbers_come_from_meta_and_the_run(smoke_export):
     meta = yaml.safe_load((ROOT / "meta.yaml").read_text())
     html = landing.headline_html(meta)

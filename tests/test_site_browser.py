@@ -18,12 +18,17 @@ fresh smoke run. It is served on 127.0.0.1 and:
 * the chart's reading (which evaluation it is, and its two lessons) is on the page with JavaScript off;
 * moving the scrubber shows that iteration's numbers and "what to notice" lines (computed from
   ``scrubber.json``), and redraws both worlds, the spawn pose's ghost included;
-* every image on every notebook page loads.
+* every image on every notebook page loads;
+* every notebook page (issue 42, item 7), in the landing page's eight cases: no console error, no
+  failed or foreign request, no text under 10 px, nothing wider than the screen, one search box on a
+  desktop, the back-to-top pill over no text, no button shown with JavaScript off, every figure
+  linked to its full size, no install cell; every link on every page resolves.
 """
 
 from __future__ import annotations
 
 import functools
+import importlib.util
 import http.server
 import json
 import os
@@ -50,7 +55,7 @@ def site(tmp_path_factory) -> Path:
         html = Path(given).resolve()
         assert (html / "index.html").exists(), f"SITE_HTML={given} holds no built site (make site-smoke)"
         return html
-    if not Path(sys.executable).with_name("jupyter-book").exists():
+    if importlib.util.find_spec("jupyter_book") is None:
         skip_or_fail("Jupyter Book is not installed (make site-deps), and SITE_HTML names no built site")
     tmp = tmp_path_factory.mktemp("site")
     subprocess.run([sys.executable, "-m", "scripts.chapter", "--smoke", "--out", str(tmp / "run")], cwd=ROOT, check=True,
@@ -376,7 +381,7 @@ def test_scrubber_moves_figure_and_numbers(browser, served, site):
 
 def test_every_notebook_page_loads_its_images(browser, served, site):
     pages = sorted((site / "notebooks").glob("*.html"))
-    assert len(pages) == 6
+    assert len(pages) >= 6
     for html in pages:
         page = browser.new_page()
         seen = _watch(page, served)
@@ -389,3 +394,96 @@ def test_every_notebook_page_loads_its_images(browser, served, site):
         page.close()
         assert not broken, f"{html.name}: images that did not load: {broken}"
         assert not _clean(seen), (html.name, _clean(seen))
+
+
+# -- every notebook page (issue 42, item 7) -------------------------------------------------------
+
+def _notebook_pages(site: Path) -> list[str]:
+    """Every notebook's page (one per executed notebook: a new notebook is picked up by itself)."""
+    return [f"notebooks/{p.name}" for p in sorted((site / "notebooks").glob("*.html"))]
+
+
+@pytest.mark.parametrize("width,scheme,js", CASES, ids=[f"{w}-{s}-{'js' if j else 'nojs'}" for w, s, j in CASES])
+def test_every_notebook_page_at_first_sight(browser, served, site, artifacts, width, scheme, js):
+    """Each notebook page, as the landing page: no console error, no failed request, no request to
+    another host, no text under 10 px, nothing wider than the screen; besides, one search box on a
+    desktop, the back-to-top pill (JavaScript on, shown on scrolling up) over no text, no button
+    shown with JavaScript off (it would do nothing), every figure loaded and a link to its full size,
+    and no plumbing (the install cell) on the page. Each page's first screen is kept (JavaScript on)."""
+    from browser_support import PAGE_MEASURE, problems, watch
+
+    px = WIDTHS[width]
+    pages = _notebook_pages(site)
+    assert len(pages) >= 6
+    failures = {}
+    for path in pages:
+        ctx = browser.new_context(viewport={"width": px, "height": FIRST_SCREEN_PX}, color_scheme=scheme,
+                                  java_script_enabled=js)
+        page = ctx.new_page()
+        seen = watch(page, served, js)
+        page.goto(f"{served}/{path}")
+        page.wait_for_load_state("networkidle")
+        page.evaluate("document.fonts.ready.then(() => true)")
+        stem = Path(path).stem
+        if js:
+            page.screenshot(path=str(artifacts / f"site_{stem}_{px}_{scheme}.png"))
+            page.mouse.wheel(0, 4000)                     # the theme shows its pill on scrolling back up
+            page.wait_for_timeout(300)
+            page.mouse.wheel(0, -600)
+            page.wait_for_timeout(600)
+        m = page.evaluate(PAGE_MEASURE)
+        # the figures (an animation's frame, drawn by its script from data: URLs, is not one)
+        figures = page.evaluate("""() => [...document.querySelectorAll('.cell_output img:not(.animation img)')].map(i => [
+            i.getAttribute('src'), i.complete && i.naturalWidth > 0,
+            i.closest('a.figure-full') ? i.closest('a.figure-full').getAttribute('href') : null])""")
+        text = page.inner_text("body")
+        ctx.close()
+        wrong = {k: v for k, v in {
+            "seen": problems(seen),
+            "small text": m["smallest"][0] if m["smallest"][0][0] < MIN_TEXT_PX else None,
+            "wider than the screen": (m["page_overflow"], m["wide"]) if m["page_overflow"] > 1 or m["wide"] else None,
+            "search boxes": m["search"] if px >= 1280 and js and len(m["search"]) != 1 else None,
+            "covered by the pill": m["covered"] or None,
+            "dead buttons": m["buttons"] if not js and m["buttons"] else None,
+            "figures": [f for f in figures if not f[1] or f[2] != f[0]] or (None if figures else "no figure"),
+            "plumbing": "google.colab" if "google.colab" in text else None,
+        }.items() if v}
+        if wrong:
+            failures[path] = wrong
+        (artifacts / f"site_{stem}_{px}_{scheme}{'' if js else '_nojs'}.json").write_text(json.dumps(m, indent=1))
+    assert not failures, json.dumps(failures, indent=1)[:6000]
+
+
+def test_every_link_on_every_page_resolves(browser, served, site):
+    """Every link on every page of the site (the landing page, each notebook's, the reading list),
+    JavaScript on and off, the toolbar's included: a page of the site loads (no 404) and holds the
+    anchor it points to; a link out of the site is https (the lane runs offline: not fetched)."""
+    pages = ["index.html", "reading.html", *_notebook_pages(site)]
+    hrefs = set()
+    for js in (True, False):
+        ctx = browser.new_context(viewport={"width": WIDTHS["desktop"], "height": 800}, java_script_enabled=js)
+        for path in pages:
+            page = ctx.new_page()
+            page.goto(f"{served}/{path}")
+            page.wait_for_load_state("networkidle")
+            hrefs |= set(page.eval_on_selector_all("a[href]", "els => els.map(e => e.href)"))
+            page.close()
+        ctx.close()
+    ctx = browser.new_context()
+    broken, outside, texts = [], [], {}
+    for href in sorted(hrefs):
+        url, fragment = urldefrag(href)
+        if not url.startswith(served):
+            outside.append(href)
+            continue
+        if url not in texts:
+            response = ctx.request.get(url)
+            texts[url] = (response.status, response.text() if response.ok else "")
+        status, text = texts[url]
+        if status >= 400:
+            broken.append(f"{href}: {status}")
+        elif fragment and f'id="{fragment}"' not in text and f'name="{fragment}"' not in text:
+            broken.append(f"{href}: no element with id {fragment!r}")
+    ctx.close()
+    assert not broken, broken
+    assert all(urlsplit(u).scheme in ("https", "mailto") for u in outside), [u for u in outside if not u.startswith("https")]

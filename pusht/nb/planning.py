@@ -15,10 +15,10 @@ import numpy as np
 from pusht.palette import DREAM, REAL
 
 from . import figure
-from .planning_measure import (LABELS, Ex4Result, Rung, actor_gap, configs, cut, outcome, paired,  # noqa: F401
+from .planning_measure import (LABELS, Ex4Result, Rung, actor_readings, configs, cut, outcome, paired,  # noqa: F401
                                plan_in, read_rung, settings, shares, starts, zero_census)
-from .planning_words import (EX4_NOTE, EX4_OPTIONS, census_sentence, decided, drift_sentence,  # noqa: F401
-                             ex4_reconciliation, ex4_verdict, exploit_sentence, gate_predicted_sentence,
+from .planning_words import (EX4_NOTE, EX4_OPTIONS, actor_sentence, census_sentence, decided,  # noqa: F401
+                             drift_sentence, ex4_reconciliation, ex4_verdict, gate_predicted_sentence,
                              gate_sentence, gate_table, outcome_sentence, outcome_table, passes, shares_sentence,
                              shares_table)
 from .prose import self_checks
@@ -64,7 +64,8 @@ def experiment(cfg, rungs: dict, s, seeds, cache, progress=None, update=None) ->
     ro["planner_chapter"] = plan_in(rungs["chapter"].stage, seeds, cfg.eval_horizon, s, cfg.device, progress, update)
     seconds["planner_chapter_s"] = time.perf_counter() - t0
     outcomes = {name: outcome(r, ro["zero"]) for name, r in ro.items()}
-    return Ex4Result(outcomes=outcomes, rollouts=ro, actor_dream=cut(actor.rollouts["dream"], n), planned=planned,
+    return Ex4Result(outcomes=outcomes, rollouts=ro, actor_dream=cut(actor.rollouts["dream"], n),
+                     dream_zero=cut(actor.rollouts["dream_zero"], n), planned=planned,
                      actor_metrics=actor.metrics,
                      gates={"planner": rungs["recipe"].gate, "planner_chapter": rungs["chapter"].gate},
                      seconds=seconds)
@@ -83,6 +84,31 @@ def as_json(rungs: dict, census: dict, res: Ex4Result | None, cfg, s) -> dict:
         out["outcomes"] = res.outcomes
         out["letter"] = ex4_verdict(res)
     return out
+
+
+def summary_table(out) -> str:
+    """Every seed whose results this notebook wrote under ``out`` (``metrics/planning/plan_seed<N>.json``):
+    each world model's gate beside the planner's real outcome in it, and the actor's."""
+    import json
+    from pathlib import Path
+
+    files = sorted(Path(out, "metrics", "planning").glob("plan_seed*.json"), key=lambda p: int(p.stem[9:]))
+    rows = []
+    for path in files:
+        r = json.loads(path.read_text())
+        if "outcomes" not in r:
+            continue
+        o, g = r["outcomes"], r["gates"]
+        cell = {name: f"{x['successes']}/{x['n']} ({x['minus_zero']:+.3f} ± {x['minus_zero_se']:.3f})"
+                for name, x in o.items()}
+        rows.append(f"| {r['seed']} | {'passes' if g['chapter']['passed'] else 'fails'} | {cell['planner_chapter']} | "
+                    f"{'passes' if g['recipe']['passed'] else 'fails'} | {cell['planner']} | {cell['actor']} | "
+                    f"({r['letter']}) |")
+    if not rows:
+        return "*No seed's results found yet.*"
+    return ("| seed | gate, chapter's model | planner in it: solved (minus zero actions, reward/step) | gate, recipe's "
+            "model | planner in it | actor in it | Exercise 4 |\n| --- | --- | --- | --- | --- | --- | --- |\n"
+            + "\n".join(rows) + f"\n\n{len(rows)} seed(s) found in `{Path(out)}`.")
 
 
 # --- figures ---------------------------------------------------------------------------------------
@@ -131,6 +157,7 @@ def fig_gate(rungs: dict):
     for i, n in enumerate(names):
         ax.text(i, ax.get_ylim()[0], "passes" if rungs[n].gate["passed"] else "fails", ha="center", va="bottom",
                 fontsize=9, weight="bold")
+    ax.set_xlabel("world model: the chapter's, then on the richer data with neither, one or both model changes")
     ax.set_ylabel("expert minus zero actions\n(reward per step; bars ± 1 s.e.)")
     ax.set_title("The gate: does the dream rank the expert's pushes above standing still?")
     ax.legend(fontsize=8, loc="upper left")
@@ -158,6 +185,7 @@ def fig_outcomes(res: Ex4Result):
         ax.text(i, 0.005, f"{o['successes']}/{o['n']} solved", ha="center", va="bottom", fontsize=9)
     ax.set_xticks(range(len(names)), [_ROWS[n].replace(", ", ",\n") for n in names], fontsize=8)
     ax.set_ylim(min(v) - 0.1, 0.06)
+    ax.set_xlabel("policy, all from the same held-out starts")
     ax.set_ylabel("real reward per step\n(higher is better; bars ± 1 s.e.)")
     ax.set_title("In reality, from the same held-out starts")
     ax.legend(fontsize=8, loc="lower right")

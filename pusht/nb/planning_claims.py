@@ -58,8 +58,15 @@ def below_zero_action(*, diff, se, k, min_effect, quantity):
 
 @claim("07.actor_exploits", "the actor's dream rates it above what reality pays it from the same starts, paired, "
        "beyond k standard errors and by at least the minimum effect", control="reality")
-def actor_exploits(*, gap, se, k, min_effect):
+def actor_exploits(*, gap, se, k, min_effect, quantity):
     return beyond(gap, se, k, min_effect, +1)
+
+
+@claim("07.actor_below_zero_in_dream", "the actor's own dream of the evaluation rates it below the same dream's "
+       "zero actions from the same starts, paired, beyond k standard errors and by at least the minimum effect: "
+       "it did not learn a good policy even in the model", control="zero actions")
+def actor_below_zero_in_dream(*, diff, se, k, min_effect, quantity):
+    return beyond(diff, se, k, min_effect, -1)
 
 
 @claim("07.gate_predicted", "for every world model the planner ran in, the gate's verdict, read before planning, "

@@ -163,6 +163,7 @@ class Ex4Result:
     outcomes: dict                     # {"planner", "planner_chapter", "actor", "zero", "expert"}: outcome()
     rollouts: dict                     # the same keys: real-sim Rollouts (the actor's cut to the starts)
     actor_dream: object                # the actor's dream of the same starts (Rollout)
+    dream_zero: object                 # zero actions in the same dream (Rollout): the actor's dream's control
     planned: list                      # plan_rollout's record for the recipe's planner
     actor_metrics: dict                # the actor run's metrics.json
     gates: dict                        # {"planner": gate, "planner_chapter": gate} the models' gates
@@ -181,6 +182,12 @@ def cut(rollout, n: int):
                    pos_err=rollout.pos_err[:, :n], success=rollout.success[:n])
 
 
-def actor_gap(actor_dream, actor_real) -> dict:
-    """The actor's imagination gap on the starts: its dream's reward per step minus reality's, paired."""
-    return paired(actor_dream.return_per_step, actor_real.return_per_step)
+def actor_readings(res: Ex4Result, train_horizon: int) -> dict:
+    """The actor against its controls, paired over the starts: its dream's rating minus the same dream's
+    zero actions (``dream_vs_zero``), and its dream minus reality over the whole evaluation
+    (``gap_eval``) and over the first ``train_horizon`` steps, those it learns from (``gap_train``)."""
+    dream, real = res.actor_dream, res.rollouts["actor"]
+    return {"dream": float(dream.return_per_step.mean()), "dream_zero": float(res.dream_zero.return_per_step.mean()),
+            "dream_vs_zero": paired(dream.return_per_step, res.dream_zero.return_per_step),
+            "gap_eval": paired(dream.return_per_step, real.return_per_step),
+            "gap_train": paired(per_start(dream, train_horizon), per_start(real, train_horizon))}

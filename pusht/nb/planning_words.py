@@ -7,7 +7,7 @@ from __future__ import annotations
 from pusht.env import CONTROL_DT as DT, SUCCESS_POS
 
 from .fmt import pm
-from .planning_claims import (actor_exploits, below_zero_action, change_lowered_signal, change_raised_signal,
+from .planning_claims import (actor_below_zero_in_dream, actor_exploits, below_zero_action, change_lowered_signal, change_raised_signal,
                               drift_toward_target, gate_passes, gate_predicted, succeeds_in_reality,
                               zero_only_on_target)
 from .planning_measure import LABELS, succeeds
@@ -143,14 +143,20 @@ def shares_sentence(shares: dict) -> str:
     delta = [v["delta_alone"], v["delta_with_size"]]
     size = [v["size_alone"], v["size_with_delta"]]
 
+    if delta[0] == size[0] == "raised" and delta[1] == size[1] == "no change beyond the noise":
+        return ("On your run, **each change alone raised the dream's expert signal, and neither added to the other** "
+                "beyond the noise: predicting changes and twice the width repair the same thing here.")
+
     def says(verdicts, what):
         if all(x == "raised" for x in verdicts):
-            return f"{what} raised the dream's expert signal at both settings of the other change"
-        if any(x == "raised" for x in verdicts):
-            return f"{what} raised it at one setting of the other change only"
+            return f"{what} raised the dream's expert signal with and without the other change"
+        if verdicts[0] == "raised":
+            return f"{what} raised the dream's expert signal alone, but added nothing beyond the noise on top of the other"
+        if verdicts[1] == "raised":
+            return f"{what} raised the dream's expert signal only on top of the other change"
         if any(x == "lowered" for x in verdicts):
-            return f"{what} did not raise it (lowered it at {sum(x == 'lowered' for x in verdicts)} of 2 settings)"
-        return f"{what} made no difference beyond the noise"
+            return f"{what} did not raise the dream's expert signal (lowered it {sum(x == 'lowered' for x in verdicts)} time(s) of 2)"
+        return f"{what} made no difference to the dream's expert signal beyond the noise"
     return f"On your run, {says(delta, 'predicting changes')}; {says(size, 'twice the width')}."
 
 
@@ -201,17 +207,43 @@ def outcome_sentence(res) -> str:
             + _policy_words(res, "planner_chapter", "The same planner in the chapter's model") + ".")
 
 
-def exploit_sentence(res, gap: dict) -> str:
-    """The actor's dream against its reality on the same starts: did it exploit the better model?"""
-    exploits = actor_exploits(gap=gap["diff"], se=gap["se"], k=gap["k"], min_effect=gap["min_effect"])
-    dream = float(res.actor_dream.return_per_step.mean())
-    real = res.outcomes["actor"]["reward"]
-    if exploits:
-        return (f"The actor's own dream rates it {dream:+.3f} per step; reality pays {real:+.3f}: a gap of "
-                f"**{pm(gap['diff'], gap['se'])}**, beyond the noise. Even the model that passes the gate is "
-                f"exploited over a {res.rollouts['zero'].actions.shape[0]}-step open-loop dream.")
-    return (f"The actor's own dream rates it {dream:+.3f} per step; reality pays {real:+.3f}: a gap of "
-            f"{pm(gap['diff'], gap['se'])}, not beyond the noise and the minimum effect.")
+def actor_sentence(res, train_horizon: int) -> str:
+    """Why the actor failed, read against two controls on the same starts: its own dream's rating of
+    it against the same dream's zero actions (did it learn a good policy even in the model?), and its
+    dream against reality over the whole evaluation and over the steps it trains on (did it exploit
+    the model?)."""
+    from .planning_measure import actor_readings
+
+    r = actor_readings(res, train_horizon)
+    vs, whole, short = r["dream_vs_zero"], r["gap_eval"], r["gap_train"]
+    below = actor_below_zero_in_dream(diff=vs["diff"], se=vs["se"], k=vs["k"], min_effect=vs["min_effect"],
+                                      quantity="actor dream vs zero")
+    rosy = {span: actor_exploits(gap=t["diff"], se=t["se"], k=t["k"], min_effect=t["min_effect"], quantity=f"actor gap {span}")
+            for span, t in (("eval", whole), ("train", short))}
+    steps = res.rollouts["zero"].actions.shape[0]
+    first = (f"The actor's own dream of the {steps} steps rates it {r['dream']:+.3f} per step, and the same dream "
+             f"rates standing still {r['dream_zero']:+.3f}: ")
+    if below:
+        first += (f"**even in the model, the actor is worse than doing nothing** ({pm(vs['diff'], vs['se'])}). Its "
+                  f"training did not find a good policy in the dream itself, so its failure in reality is first a "
+                  f"failure of its learning, not of the model alone.")
+    elif vs["up"]:
+        first += f"in the model, it is better than doing nothing ({pm(vs['diff'], vs['se'])})."
+    else:
+        first += f"in the model, it is level with doing nothing ({pm(vs['diff'], vs['se'])})."
+    if rosy["train"]:
+        second = (f" Over the {train_horizon} steps it learns from, its dream is rosier than reality by "
+                  f"**{pm(short['diff'], short['se'])}** per step, beyond the noise: the short dreams it is trained on "
+                  f"pay it more than reality does, and it learned from them.")
+    else:
+        second = (f" Over the {train_horizon} steps it learns from, its dream and reality differ by "
+                  f"{pm(short['diff'], short['se'])} per step, not beyond the noise and the minimum effect.")
+    if rosy["eval"]:
+        second += (f" Over the whole evaluation the dream rates it {pm(whole['diff'], whole['se'])} above reality: it "
+                   f"exploits even the model that passes the gate.")
+    else:
+        second += f" Over the whole evaluation its dream and reality agree within the noise ({pm(whole['diff'], whole['se'])})."
+    return first + second
 
 
 def gate_predicted_sentence(res) -> str:
@@ -240,8 +272,8 @@ def ex4_reconciliation(res) -> tuple[str, str]:
     letter = ex4_verdict(res)
     words = [_policy_words(res, "planner", "The planner") + ".",
              _policy_words(res, "actor", "The actor, trained in the same model") + ".",
-             "Both act in the same frozen model. The actor learned once, from long dreams that start from "
-             "a filtered frame and never look at reality again; the planner dreams only "
+             "Both act in the same frozen model. The actor learned its behaviour once, in the dream, and then "
+             "acts on it without ever comparing a prediction with reality; the planner dreams only "
              f"{res.gates['planner']['horizon']} steps ({res.gates['planner']['horizon'] * DT:.1f} s) ahead and "
              "starts again from the true state at every real step, so a dream's error has little time to grow, "
              f"and what it promised is checked against reality every {DT:.1f} s.",
@@ -250,6 +282,6 @@ def ex4_reconciliation(res) -> tuple[str, str]:
 
 
 __all__ = ["EX4_NOTE", "EX4_OPTIONS", "LABELS", "census_sentence", "change_verdict", "decided", "drift_sentence",
-           "ex4_reconciliation", "ex4_verdict", "exploit_sentence", "gate_predicted_sentence", "gate_sentence",
+           "ex4_reconciliation", "ex4_verdict", "actor_sentence", "gate_predicted_sentence", "gate_sentence",
            "gate_table", "outcome_sentence", "outcome_table", "passes", "shares_sentence", "shares_table",
            "succeeds"]

@@ -310,10 +310,12 @@ reconcile("ex4", *nb07.ex4_reconciliation(result))   # the words python -m pusht
 # Left, the actor: where its own dream says the block goes over the whole 10 s (purple, dashed),
 # against where it really goes (orange). Right, the planner: where the block really goes, and every
 # tenth real step the plan it chose, as the dream expected it, drawn from the true state of that step.
+# Below the picture, the actor read against two controls on all the starts: the same dream's zero
+# actions (did it learn a good policy even in the model?) and reality (did it exploit the model?).
 
 # %%
 show(nb07.fig_one_start(result), "07_one_start.png")
-display(Markdown(nb07.exploit_sentence(result, nb07.actor_gap(result.actor_dream, result.rollouts["actor"]))))
+display(Markdown(nb07.actor_sentence(result, cfg.imag_horizon)))
 display(Markdown(nb07.gate_predicted_sentence(result)))
 
 # %%
@@ -323,6 +325,16 @@ ask(SELF_CHECKS["replan"], "")
 (METRICS / f"plan_seed{cfg.seed}.json").write_text(
     json.dumps(nb07.as_json(rungs, census, result, cfg, S), sort_keys=True, indent=2, default=float) + "\n")
 print(f"saved {METRICS / f'plan_seed{cfg.seed}.json'}")
+
+# %% [markdown]
+# ## Every seed in your output folder
+#
+# One seed is one run. The table reads every seed's results this notebook wrote into `OUT`: run it
+# with another `SEED` into the same `OUT` (or `make claims`, which runs seeds 0-5) and the table
+# grows. Does the gate's reading go with the planner's outcome on every seed?
+
+# %%
+display(Markdown(nb07.summary_table(OUT)))
 
 # %% [markdown]
 # ## Read next
