@@ -2,7 +2,7 @@
 
 The worker kills each notebook's kernel once its last cell has run (``Execute.shutdown_kernel =
 "immediate"``). jupyter_client then polls every 0.1 s until the kernel's process is gone, so a
-kernel that dies at once still costs up to 0.1 s, six times per student. :class:`GradingKernelManager`
+kernel that dies at once still costs up to 0.1 s, once per notebook of each student. :class:`GradingKernelManager`
 polls every 10 ms; everything else is ``AsyncKernelManager``'s. Measured through the kernel factory
 (benchmarks/grading_wallclock.txt): a kill took 0.113 s and now 0.024 s.
 """

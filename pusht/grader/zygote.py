@@ -1,6 +1,6 @@
 """A kernel factory for the course's autograder: import once, fork a fresh kernel per notebook.
 
-Learners never need this module. Grading one student runs six notebooks, each in a new Jupyter
+Learners never need this module. Grading one student runs every notebook (seven), each in a new Jupyter
 kernel, and every one of those kernels used to spend about 3.4 s starting Python, ipykernel and
 importing torch and this package before its first cell did anything (``benchmarks/
 grading_wallclock.txt``). The autograder (``autograde/sandbox.py``) instead starts this process
