@@ -168,6 +168,14 @@ def test_forged_receipts_earn_no_completion_point(hostile, student):
     assert not report[student]["completion"]["ex1"][0]
 
 
+def test_the_planner_run_before_the_lock_costs_exercise_4s_completion_point_only(hostile):
+    course, report, _, _ = hostile
+    got = scores(course, "plannerfirst", "07_planning")
+    assert got["ex4_order"] == 0 and got["cem_update_impl_tests"] == 4, got
+    ok, why = report["plannerfirst"]["completion"]["ex4"]
+    assert not ok and "ran directly" in why, why
+
+
 def test_the_kernel_dying_keeps_the_points_already_earned_with_a_note(hostile):
     _, report, _, _ = hostile
     assert any("points from the tests that had already run are kept" in n for n in report["diesafter"]["notes"])

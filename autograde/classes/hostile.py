@@ -52,6 +52,7 @@ STUDENTS = {
                     "the lock the experiment quotes", None),
     "alreadylocked": ("prints the words 'already locked' to switch the order check off", None),
     "pipelinefirst": ("runs the experiment's functions directly before locking", None),
+    "plannerfirst": ("runs notebook 07's planner directly before locking Exercise 4", None),
     # attacks on the verdict path, the grader's files and its resources
     "forgeresults": ("wrong reward; a post-run hook forges the reference's numbers into every results file and "
                      "rebinds pusht.grading.submit and sys.modules['pusht.grading'] to record the package's answer", 0),
@@ -300,6 +301,16 @@ def build(executed: Path, canary: str = "/nonexistent") -> dict[str, bytes]:
     lc_index = nb["cells"].index(lc)
     nb["cells"].insert(lc_index, early)
     files["pipelinefirst_04_imagination_gap.ipynb"] = json.dumps(nb).encode()
+
+    nb = _load(executed, "07_planning")             # the planner run on the starts, then the lock
+    lc = next(c for c in nb["cells"] if _grade_id(c) == "ex4_prediction")
+    early = _code_cell("peek = nb07.plan_in(rungs['recipe'].stage, STARTS, cfg.eval_horizon, S)\n")
+    early["execution_count"] = lc["execution_count"]
+    for c in nb["cells"]:
+        if isinstance(c.get("execution_count"), int) and c["execution_count"] >= early["execution_count"]:
+            c["execution_count"] += 1
+    nb["cells"].insert(nb["cells"].index(lc), early)
+    files["plannerfirst_07_planning.ipynb"] = json.dumps(nb).encode()
 
     # --- attacks on the verdict path, the grader's files and its resources ---------------------------
     nb = _reward(executed)
