@@ -118,19 +118,19 @@ def fig_drift(rungs: dict, dt: float = 0.1):
     over the whole evaluation; reality's untouched block does not move."""
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(7.5, 4.2))
-    for (name, r), style in zip(rungs.items(), ("-", "--", "-.", ":", "-")):
+    fig, ax = plt.subplots(figsize=(10, 4.2))
+    shades = plt.cm.Purples(np.linspace(0.45, 1.0, len(rungs)))          # every dream in the dream's hue
+    for (name, r), style, color in zip(rungs.items(), ("-", "--", "-.", ":", "-"), shades):
         t = np.arange(len(r.drift_curve)) * dt
-        ax.plot(t, 100 * r.drift_curve, style, lw=2.4 if name in ("chapter", "recipe") else 1.4,
-                color=DREAM if name == "chapter" else None, label=f"dream: {r.label}")
+        ax.plot(t, 100 * r.drift_curve, style, lw=2.4 if name in ("chapter", "recipe") else 1.6,
+                color=DREAM if name == "chapter" else color, label=f"dream: {r.label}")
     ax.axhline(0, color=REAL, lw=2, label="reality (the block stays put)")
     horizon = next(iter(rungs.values())).gate["horizon"]
-    ax.axvline(horizon * dt, color="gray", lw=1, ls=":")
-    ax.text(horizon * dt, ax.get_ylim()[1] * 0.95, " the planner's horizon", va="top", fontsize=9, color="gray")
+    ax.axvline(horizon * dt, color="gray", lw=1, ls=":", label=f"the planner's horizon ({horizon * dt:.1f} s)")
     ax.set_xlabel("dreamed time (s)")
     ax.set_ylabel("untouched block's displacement (cm)")
     ax.set_title("Zero actions: where the dream takes a block nobody touches")
-    ax.legend(fontsize=8, loc="upper left")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.tight_layout()
     return fig
 
@@ -212,15 +212,14 @@ def fig_one_start(res: Ex4Result, i: int | None = None, every: int = 10):
     i = pick_start(res) if i is None else i
     fig, axes = plt.subplots(1, 2, figsize=(11, 5.4))
     real_a, dream_a = res.rollouts["actor"].obs[:, i], res.actor_dream.obs[:, i]
-    ax = setup_arena(axes[0], "The actor: one long dream, never checked")
+    ax = setup_arena(axes[0], "The actor: one long dream,\nnever checked against reality")
     draw_state(ax, real_a[0], alpha=0.35)
     ax.plot(*real_a[:, 2:4].T, color=REAL, lw=2.2, label="block in reality")
     ax.plot(*dream_a[:, 2:4].T, color=DREAM, lw=2.2, ls="--", label="block in its dream")
     draw_state(ax, real_a[-1], target=False, tee_color=REAL, alpha=0.5, label="reality, at the end")
     ax.legend(fontsize=8, loc="lower left")
     real_p = res.rollouts["planner"].obs[:, i]
-    ax = setup_arena(axes[1], f"The planner: a short dream from the true state, every step (every {every}th shown)")
-    ax.title.set_fontsize(10)
+    ax = setup_arena(axes[1], f"The planner: a short dream from the true state\nat every step (every {every}th shown)")
     draw_state(ax, real_p[0], alpha=0.35)
     ax.plot(*real_p[:, 2:4].T, color=REAL, lw=2.2, label="block in reality")
     first = True
