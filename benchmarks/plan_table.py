@@ -233,11 +233,17 @@ def models_section(ladder: list[dict], notebook: list[dict]) -> list[str]:
             out.append(f"| {kind} | " + " | ".join(cells) + " |")
         out.append("")
     every = [r for g in groups.values() for r in g]
-    agree = sum(yes(r["gate_eval_horizon_passed"]) == yes(r["plan_beats_zero"]) for r in every)
-    solved = sum(yes(r["gate_eval_horizon_passed"]) == (int(r["successes"]) > 0) for r in every)
-    out += [f"- The gate (100 steps) agrees with the outcome \"the planner beats zero actions beyond the noise\" "
-            f"on **{agree} of {len(every)}** (model, seed) pairs, and with \"at least one start solved\" on "
-            f"{solved} of {len(every)}.", ""]
+    for span, words in (("eval_horizon", "100 steps"), ("plan_horizon", "the plan's horizon")):
+        gated = [yes(r[f"gate_{span}_passed"]) for r in every]
+        agree = sum(g == yes(r["plan_beats_zero"]) for g, r in zip(gated, every))
+        solved = sum(g == (int(r["successes"]) > 0) for g, r in zip(gated, every))
+        wrong = [f"{r['model_label']} seed {r['seed']} ({'passes' if g else 'fails'}, "
+                 f"{'beats' if yes(r['plan_beats_zero']) else 'does not beat'} zero)"
+                 for g, r in zip(gated, every) if g != yes(r["plan_beats_zero"])]
+        out.append(f"- The gate at {words} agrees with the outcome \"the planner beats zero actions beyond the "
+                   f"noise\" on **{agree} of {len(every)}** (model, seed) pairs, and with \"at least one start "
+                   f"solved\" on {solved} of {len(every)}" + (f"; it disagrees on: {'; '.join(wrong)}." if wrong else "."))
+    out.append("")
     return out
 
 
