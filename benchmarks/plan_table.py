@@ -33,6 +33,7 @@ BENCH = ROOT / "benchmarks"
 # Notebook 07's default planner (samples 64, elites 8; the rest PlanSettings' defaults).
 DEFAULT_SETTINGS = dict(horizon="16", knots="4", samples="64", iters="4", elites="8", init_std="0.5",
                         min_std="0.05", warm="True", window="0", starts="30")
+BENCH_OF: dict[int, Path] = {}    # each row read: the CSV it came from (its JSONs lie beside it)
 MODEL_ORDER = ("chapter", "recipe data, state 64", "recipe data, delta 64", "recipe data, state 128", "recipe")
 
 
@@ -82,6 +83,7 @@ def read(name: str, bench: Path = BENCH) -> list[dict]:
         rows = list(csv.DictReader(f))
     for r in rows:
         r["file"], r["model_label"], r["settings_label"] = name, model_label(r["model"]), settings_label(r["settings"])
+        BENCH_OF[id(r)] = path
         js = json_of(path, r)
         built = json.loads(js.read_text()).get("world_model") if js.exists() else None
         # the JSON is rewritten by a rerun of the same settings, model and seed: trust it only if it is this row's
@@ -247,12 +249,14 @@ def models_section(ladder: list[dict], notebook: list[dict]) -> list[str]:
     return out
 
 
-def sensitivity_section(sens: list[dict], seeds: list[dict]) -> list[str]:
+def sensitivity_section(sens: list[dict], seeds: list[dict], notebook: list[dict]) -> list[str]:
     out = ["## 3. The planner's sensitivity: one setting changed at a time from 07's default (the recipe's "
            "model, seeds 0-1)", "",
            "`python -m benchmarks.bench_plan --samples 64 --elites 8 --seeds 0 1 --csv "
-           "benchmarks/plan_sensitivity.csv` plus the one flag; the 256-sample rows are `plan_seeds.csv`'s.", ""]
-    rows = [r for r in latest(sens + seeds) if r["model_label"] == "recipe" and r["seed"] in ("0", "1")]
+           "benchmarks/plan_sensitivity.csv` plus the one flag; the 256-sample rows are `plan_seeds.csv`'s, 07's "
+           "default's are section 1's (an earlier reading of the same setting, model and seed, replaced here, "
+           "stays in its file).", ""]
+    rows = [r for r in latest(sens + seeds + notebook) if r["model_label"] == "recipe" and r["seed"] in ("0", "1")]
     if not rows:
         return out + ["(no rows yet)", ""]
     order = {}
@@ -264,6 +268,79 @@ def sensitivity_section(sens: list[dict], seeds: list[dict]) -> list[str]:
     out += head("| setting | " + SEED_HEAD[2:]) + [f"| {s} " + seed_line(r) for s, g in order.items()
                                                   for r in by_seed(g)] + [""]
     return out
+
+
+def confirm_section(confirm: list[dict], sens: list[dict], notebook: list[dict]) -> list[str]:
+    out = ["## 4. Section 3's best, on the seeds it was not chosen on", "",
+           "`python -m benchmarks.bench_plan --samples 64 --elites 8 --seeds 2 3 4 5 --csv benchmarks/plan_confirm.csv` "
+           "plus the setting's flag; its seeds 0-1 are section 3's rows, 07's default is section 1's.", ""]
+    confirm = [r for r in latest(confirm) if r["model_label"] == "recipe"]
+    if not confirm:
+        return out + ["(no rows yet)", ""]
+    settings = {r["settings"] for r in confirm}
+    default = [r for r in latest(notebook) if r["settings_label"] == "07 default" and r["model_label"] == "recipe"]
+    pool, detail, pool_notes = [], [], []
+    for setting in sorted(settings):
+        mine = [r for r in latest(confirm + sens) if r["settings"] == setting and r["model_label"] == "recipe"]
+        for name, rows in ((settings_label(setting), mine), ("07 default", default)):
+            for which, keep in (("seeds 2-5", lambda r: r["seed"] not in ("0", "1")), ("all seeds", lambda r: True)):
+                chosen = by_seed([r for r in rows if keep(r)])
+                if chosen:
+                    pool.append(pool_line(f"{name}, {which}", pooled(chosen)))
+        detail += [f"| {settings_label(setting)} " + seed_line(r) for r in by_seed(mine)]
+        for which, rows in (("the seeds it was not chosen on", [r for r in mine if r["seed"] not in ("0", "1")]),
+                            ("all seeds", mine)):
+            pairs = paired(rows, default)
+            if pairs:
+                only, other, n, seeds = pairs
+                pool_notes.append(f"- Paired on the same starts, {which} ({n} starts of seeds {seeds}): solved by "
+                                  f"{settings_label(setting)} alone {only}, by 07's default alone {other}; "
+                                  f"two-sided sign test on those {only + other}: p = {sign_test(only, other):.2g}.")
+    out += head(POOL_HEAD.format(what="setting")) + pool + [""] + pool_notes + [""]
+    out += head("| setting | " + SEED_HEAD[2:]) + detail + [""]
+    return out
+
+
+def per_start_success(r: dict) -> dict | None:
+    """{start seed: solved?} of a row's planner, from its JSON (None if the JSON is another run's)."""
+    import json
+
+    js = json_of(BENCH_OF[id(r)], r)
+    if not js.exists():
+        return None
+    res = json.loads(js.read_text())
+    if res["commit"] != r["commit"]:
+        return None
+    return {p["start_seed"]: p["plan_success"] for p in res["per_start"]}
+
+
+def paired(rows: list[dict], default: list[dict]):
+    """Starts solved by one setting and not the other, over the seeds both were run on, from the JSONs."""
+    base = {r["seed"]: r for r in default}
+    only = other = n = 0
+    seeds = []
+    for r in by_seed(rows):
+        if r["seed"] not in base:
+            continue
+        a, b = per_start_success(r), per_start_success(base[r["seed"]])
+        if a is None or b is None or set(a) != set(b):
+            continue
+        seeds.append(r["seed"])
+        n += len(a)
+        only += sum(a[k] and not b[k] for k in a)
+        other += sum(b[k] and not a[k] for k in a)
+    return (only, other, n, ", ".join(seeds)) if seeds else None
+
+
+def sign_test(b: int, c: int) -> float:
+    """Two-sided exact binomial test of b successes in b + c at one half (McNemar's exact test)."""
+    from math import comb
+
+    n = b + c
+    if n == 0:
+        return 1.0
+    tail = sum(comb(n, i) for i in range(min(b, c) + 1)) / 2 ** n
+    return min(1.0, 2 * tail)
 
 
 def summary(bench: Path = BENCH) -> str:
@@ -280,7 +357,9 @@ def summary(bench: Path = BENCH) -> str:
              "seed's start on the 2-core host.", ""]
     lines += notebook_section(notebook)
     lines += models_section(read("plan_models.csv", bench), notebook)
-    lines += sensitivity_section(read("plan_sensitivity.csv", bench), read("plan_seeds.csv", bench))
+    sens = read("plan_sensitivity.csv", bench)
+    lines += sensitivity_section(sens, read("plan_seeds.csv", bench), notebook)
+    lines += confirm_section(read("plan_confirm.csv", bench), sens, notebook)
     return "\n".join(lines).rstrip() + "\n"
 
 

@@ -103,3 +103,4 @@ def test_the_planner_summary_is_generated_from_the_csvs_and_names_each_model(tmp
     assert "Median success over the seeds" in page and "(no rows yet)" in page    # the other files are absent
     first = next(r for r in plan_table.read("plan_notebook.csv", tmp_path))
     assert f"| {first['seed']} | {first['successes']}/30 " in page
+    assert plan_table.sign_test(0, 0) == 1.0 and plan_table.sign_test(5, 0) == 2 / 32 == plan_table.sign_test(0, 5)
