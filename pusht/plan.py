@@ -353,7 +353,8 @@ def run(cfg: Config, s: PlanSettings, cache_dir=None, model_cache=None, log=prin
     T = ws.data.torch(cfg.device)
     mean, std = T["mean"], T["std"]
     seeds = start_seeds(EVAL_SEED_BASE, cfg.seed, s.starts)
-    out = {"config": cfg.to_dict(), "settings": dataclasses.asdict(s)}
+    out = {"config": cfg.to_dict(), "settings": dataclasses.asdict(s),
+           "world_model": {"built_s": ws.seconds, "data_s": ws.data_seconds}}   # as built, cached or not
     t0 = time.perf_counter()
     gates = {"plan_horizon": gate(ws.wm, seeds, s.horizon, mean, std),
              "eval_horizon": gate(ws.wm, seeds, cfg.eval_horizon, mean, std)}
@@ -363,6 +364,7 @@ def run(cfg: Config, s: PlanSettings, cache_dir=None, model_cache=None, log=prin
         t0 = time.perf_counter()
         cws = world_model_stage(chapter, cache_dir, model_cache, log, progress)
         C = cws.data.torch(cfg.device)
+        out["chapter_world_model"] = {"built_s": cws.seconds, "data_s": cws.data_seconds}
         for span, steps in (("plan_horizon", s.horizon), ("eval_horizon", cfg.eval_horizon)):
             gates[f"chapter_{span}"] = gate(cws.wm, seeds, steps, C["mean"], C["std"])
         timing["chapter_gate_s"] = time.perf_counter() - t0

@@ -78,3 +78,29 @@ def test_the_handwritten_bound_compares_like_with_like(capsys):
                           atol=1e-5)
     assert main(["--repeats", "3"]) == 0      # it checks the dream's gradients against autograd's first
     assert "saved" in capsys.readouterr().out
+
+
+def test_the_planner_summary_is_generated_from_the_csvs_and_names_each_model(tmp_path):
+    from benchmarks import plan_table
+    from pusht.config import Config
+    from benchmarks.bench_plan import MODEL_FIELDS
+
+    chapter = " ".join(f"{k}={getattr(Config(), k)}" for k in MODEL_FIELDS)
+    assert plan_table.model_label(chapter) == "chapter"
+    recipe = plan_table.read("plan_sensitivity.csv")[0]["model"]
+    assert plan_table.model_label(recipe) == "recipe"
+    assert plan_table.model_label(recipe.replace("hidden_dim=128", "hidden_dim=64")) == "recipe data, delta 64"
+    assert plan_table.settings_label("horizon=16 knots=4 samples=64 iters=4 elites=8 init_std=0.5 min_std=0.05 "
+                                     "warm=True window=0 starts=30") == "07 default"
+    assert plan_table.settings_label("horizon=8 knots=4 samples=64 iters=4 elites=8 init_std=0.5 min_std=0.05 "
+                                     "warm=True window=0 starts=30") == "horizon 8"
+    src = plan_table.BENCH / "plan_sensitivity.csv"
+    lines = src.read_text().splitlines()
+    rows = [line for line in lines[1:] if "samples=64 iters=4 elites=8" in line]
+    assert rows, "plan_sensitivity.csv has 07's default on some seed"
+    (tmp_path / "plan_notebook.csv").write_text("\n".join([lines[0]] + rows) + "\n")
+    page = plan_table.summary(tmp_path)
+    assert "Median success over the seeds" in page and "(no rows yet)" in page    # the other files are absent
+    first = next(r for r in plan_table.read("plan_notebook.csv", tmp_path))
+    assert f"| {first['seed']} | {first['successes']}/30 " in page
+    assert plan_table.sign_test(0, 0) == 1.0 and plan_table.sign_test(5, 0) == 2 / 32 == plan_table.sign_test(0, 5)

@@ -2,6 +2,7 @@
 world model), each checked on tiny inputs (issue 41, item 2)."""
 
 import dataclasses
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -231,7 +232,8 @@ def test_the_command_line_plans_a_smoke_run_and_prints_its_table(tmp_path):
     for words in ("planner (CEM)", "zero actions", "scripted expert", "95% interval", "gate (3 starts",
                   "batched vs one start at a time"):
         assert words in proc.stdout, words
-    assert (tmp_path / "plan.json").is_file()
+    res = json.loads((tmp_path / "plan.json").read_text())
+    assert res["world_model"]["built_s"] >= res["world_model"]["data_s"] >= 0   # the model's cost, cached or not
     bad = subprocess.run([sys.executable, "-m", "pusht.plan", "--elites", "1"], cwd=ROOT, capture_output=True,
                          text=True, timeout=60)
     assert bad.returncode == 2 and "elites must be at least 2" in bad.stderr and "Traceback" not in bad.stderr
