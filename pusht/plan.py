@@ -126,10 +126,13 @@ class PlanSettings:
 
 
 SMOKE_PLAN = dict(horizon=8, knots=2, samples=32, iters=2, elites=4, starts=3)
-# Notebook 07's planner: a quarter of the recipe's samples (benchmarks/plan_sensitivity.csv: 64 samples
-# and 8 elites solved as many starts as 256 on seeds 0-1, in a quarter of the planning time), for a
-# learner's free two-core machine.
-NOTEBOOK_PLAN = dict(samples=64, elites=8)
+# Notebook 07's planner, for a learner's free two-core machine: a quarter of the recipe's samples
+# (benchmarks/plan_sensitivity.csv: 64 samples and 8 elites solved as many starts as 256 on seeds 0-1, in a
+# quarter of the planning time) and 8 knots, chosen on seeds 0-1 among one-at-a-time changes of horizon,
+# knots and iterations (18 of 60 solved, against 10 at 4 knots) and confirmed on seeds 2-5
+# (benchmarks/plan_confirm.csv: 40 of 120 against 24; per start, 26 solved by 8 knots alone, 10 by 4 knots
+# alone, sign test p = 0.011), for about a sixth more planning time. benchmarks/plan_summary.md has them all.
+NOTEBOOK_PLAN = dict(samples=64, elites=8, knots=8)
 
 
 def ladder(smoke: bool = False) -> dict[str, dict]:

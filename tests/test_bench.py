@@ -48,10 +48,11 @@ def test_host_description_names_the_cpu_family_where_linux_tells_it():
         assert "family" in desc
 
 
-def test_the_class_benchmark_hands_in_six_notebooks_per_student_faults_included(executed_notebooks, tmp_path):
+def test_the_class_benchmark_hands_in_every_notebook_per_student_faults_included(executed_notebooks, tmp_path):
     import zipfile
     from collections import Counter
 
+    from autograde.course import NOTEBOOKS
     from benchmarks.bench_class import KINDS, class_zip
 
     executed, _ = executed_notebooks
@@ -59,7 +60,7 @@ def test_the_class_benchmark_hands_in_six_notebooks_per_student_faults_included(
     with zipfile.ZipFile(tmp_path / "class.zip") as zf:
         names = zf.namelist()
         per_student = Counter(n.split("_", 1)[0] for n in names)
-        assert sorted(per_student) == sorted(ids) and set(per_student.values()) == {6}
+        assert sorted(per_student) == sorted(ids) and set(per_student.values()) == {len(NOTEBOOKS)}
         assert zf.read("wrong002_02_reward.ipynb") != zf.read("perfect000_02_reward.ipynb")   # the fault is in
         assert zf.read("wrong002_01_world_model.ipynb") == zf.read("perfect000_01_world_model.ipynb")
     assert [i[:-3] for i in ids[:len(KINDS)]] == list(KINDS)
@@ -91,7 +92,11 @@ def test_the_planner_summary_is_generated_from_the_csvs_and_names_each_model(tmp
     assert plan_table.model_label(recipe) == "recipe"
     assert plan_table.model_label(recipe.replace("hidden_dim=128", "hidden_dim=64")) == "recipe data, delta 64"
     assert plan_table.settings_label("horizon=16 knots=4 samples=64 iters=4 elites=8 init_std=0.5 min_std=0.05 "
-                                     "warm=True window=0 starts=30") == "07 default"
+                                     "warm=True window=0 starts=30") == plan_table.FIRST
+    eight = "horizon=16 knots=8 samples=64 iters=4 elites=8 init_std=0.5 min_std=0.05 warm=True window=0 starts=30"
+    assert plan_table.is_notebook_default({"settings": eight})                 # pusht.plan.NOTEBOOK_PLAN
+    assert not plan_table.is_notebook_default({"settings": eight + " objective=tolerance"})
+    assert not plan_table.is_notebook_default({"settings": eight.replace("knots=8", "knots=4")})
     assert plan_table.settings_label("horizon=8 knots=4 samples=64 iters=4 elites=8 init_std=0.5 min_std=0.05 "
                                      "warm=True window=0 starts=30") == "horizon 8"
     src = plan_table.BENCH / "plan_sensitivity.csv"
