@@ -22,7 +22,9 @@ The rule is an over-approximation, and it splits the statements in two:
   may change any state, a file or the interpreter's settings, so its statement is kept.
 
 Imports, function and class definitions are always kept (cheap, and a function may reach them at
-run time by any name). Statements are kept in notebook order, so a later definition replaces an
+run time by any name); what a definition reads is needed where its name is, and always where a
+decorator the notebook made may file it away (``@register("f")`` into a table the function is then
+read from). Statements are kept in notebook order, so a later definition replaces an
 earlier one as in the kernel; the probe runs each under the ``__future__`` flags in force at that
 point (``pusht.grader.probe_server``), and one that raises does not stop the others.
 
@@ -182,6 +184,15 @@ def _reads(node) -> set[str]:
         out |= {s.get_name() for s in t.get_symbols() if s.is_referenced() and (top or s.is_global())}
         todo.extend(t.get_children())
     return out
+
+
+def _registered(node, made_here: set[str]) -> bool:
+    """A definition decorated by something the notebook made (``@register("name")``, ``@table.add``):
+    the decorator runs with the new function or class and may keep it anywhere, so what the
+    definition reads may be needed however the graded function is reached (``f = TABLE["name"]``)."""
+    if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+        return False
+    return any(_base_name(d.func if isinstance(d, ast.Call) else d) in made_here for d in node.decorator_list)
 
 
 def _global_writes(node) -> set[str]:
@@ -410,11 +421,17 @@ def program(cells, test_id: str, function: str, ours: frozenset[str] = frozenset
         keep[k] = True
         need(_reads(stmts[k][1]))
 
-    for k in range(len(stmts)):
-        if keep[k] and not isinstance(stmts[k][1], SETUP):
-            need(_reads(stmts[k][1]))
-    need([function])
     setup_read = [False] * len(stmts)
+    made_here = {name for name, ks in bound_by.items()
+                 if any(not isinstance(stmts[k][1], (ast.Import, ast.ImportFrom)) for k in ks)}
+    for k in range(len(stmts)):
+        node = stmts[k][1]
+        if keep[k] and not isinstance(node, SETUP):
+            need(_reads(node))
+        elif _registered(node, made_here):      # its decorator may file it anywhere: a dict, a list
+            setup_read[k] = True
+            need(_reads(node))
+    need([function])
     while todo:                                  # each name and each statement once: linear
         name = todo.pop()
         ks = list(by_name.get(name, ()))

@@ -132,28 +132,40 @@ def test_a_colab_download_grades_like_any_other(graded):
     assert any("Colab" in n for n in report["colab"]["notes"])
 
 
-def test_feedback_pages_are_the_documents_nbgraders_own_exporter_makes(graded, tmp_path):
+def test_feedback_pages_are_the_documents_nbgraders_own_exporter_makes(graded, tmp_path, monkeypatch):
     """The pages come from autograde/feedback_html.py's exporter, which skips nbconvert's
     BeautifulSoup round trip and makes the page safe (no script, a Content-Security-Policy);
     nbgrader's default exporter, on a copy of the course, makes the same documents, less what the
-    exporter removes to make them safe (tests/test_feedback_html.py says exactly what)."""
+    exporter removes to make them safe (tests/test_feedback_html.py says exactly what). Math is
+    compared as nbconvert leaves it (``$...$``): ours draws it as MathML (tests/test_feedback_math.py),
+    so our pages are made again here with nbconvert's math renderer."""
     import shutil
 
     from nbconvert.exporters import HTMLExporter
+    from nbconvert.filters.markdown_mistune import IPythonRenderer
     from test_feedback_html import same_document_made_safe
 
+    from autograde.feedback_html import _MathMLRenderer
+
     course, _, _ = graded
-    copy = tmp_path / "course"
-    shutil.copytree(course, copy, ignore=shutil.ignore_patterns("feedback"))
-    api = nbgrader_api(copy)
-    api.config.GenerateFeedback.exporter_class = HTMLExporter
+    for name in ("block_math", "inline_math", "latex_environment"):
+        monkeypatch.setattr(_MathMLRenderer, name, getattr(IPythonRenderer, name))
+    copies = {}
+    for which, exporter in (("ours", None), ("theirs", HTMLExporter)):
+        copies[which] = tmp_path / which
+        shutil.copytree(course, copies[which], ignore=shutil.ignore_patterns("feedback"))
+        api = nbgrader_api(copies[which])
+        if exporter is not None:
+            api.config.GenerateFeedback.exporter_class = exporter
+        for student in ("perfect", "wrong"):
+            assert api.generate_feedback(ASSIGNMENT, student_id=student, force=True)["success"]
     for student, n in (("perfect", len(NOTEBOOKS)), ("wrong", 1)):     # every notebook; a failed test's output
-        assert api.generate_feedback(ASSIGNMENT, student_id=student, force=True)["success"]
         pages = sorted((course / "feedback" / student / ASSIGNMENT).glob("*.html"))
         assert len(pages) == n
         for page in pages:
-            theirs = (copy / "feedback" / student / ASSIGNMENT / page.name).read_text()
-            assert same_document_made_safe(page.read_text(), theirs), page
+            ours, theirs = ((copies[w] / "feedback" / student / ASSIGNMENT / page.name).read_text()
+                            for w in ("ours", "theirs"))
+            assert same_document_made_safe(ours, theirs), page
 
 
 def test_a_student_whose_feedback_never_finishes_loses_only_their_pages(graded, tmp_path):

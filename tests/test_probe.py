@@ -584,3 +584,45 @@ def test_the_answer_key_renamed_and_wrapped_is_still_flagged():
         cells = with_test(checks.REWARD, "import torch\nfrom pusht.env import POS_SCALE, ANG_SCALE\n" + key + "\n" + tail)
         found = answer_key.copies(cells, checks.REWARD)
         assert found and "`_r`" in found, (tail, found)
+
+
+def test_a_function_filed_away_by_the_notebooks_own_decorator_keeps_the_constants_it_reads():
+    """An honest shape (the honest-variant class found it): constants in their own cell, the function
+    registered into a table by a decorator the notebook wrote, the graded name read from the table.
+    The constants are needed though no name leads from ``lambda_return`` to the definition."""
+    t = checks.LAMBDA
+    nb = with_test(t, "import torch\n", "LR_END, LR_ONE = -1, 1\nPLOT = draw_everything()\n", """
+        IMPLEMENTATIONS = {}
+
+
+        def register(name):
+            def add(fn):
+                IMPLEMENTATIONS[name] = fn
+                return fn
+            return add
+
+
+        @register('lambda_return')
+        def _v2(rewards, values, gamma, lam):
+            out, last = [], values[LR_END]
+            for t in reversed(range(rewards.shape[0])):
+                last = rewards[t] + gamma * ((LR_ONE - lam) * values[t + 1] + lam * last)
+                out.append(last)
+            return torch.stack(out[::-1])
+
+
+        lambda_return = IMPLEMENTATIONS['lambda_return']
+        """)
+    text = "\n".join(src for _, src in probe.program(nb, t.test_id, t.function))
+    assert "LR_END, LR_ONE = (-1, 1)" in text and "IMPLEMENTATIONS = {}" in text and "@register" in text
+    # a decorator from a module (not made by the notebook) files nothing away: the rule stays narrow
+    nb = with_test(t, "import torch, functools\n", "K = 3\n", """
+        @functools.lru_cache
+        def helper(x):
+            return x * K
+
+
+        def lambda_return(rewards, values, gamma, lam):
+            return rewards
+        """)
+    assert "K = 3" not in "\n".join(src for _, src in probe.program(nb, t.test_id, t.function))
