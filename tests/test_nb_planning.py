@@ -283,4 +283,4 @@ def test_the_summary_table_reads_every_seed_it_finds(tmp_path):
     table = nb07.summary_table(tmp_path)
     lines = [line for line in table.splitlines() if line.startswith("| ") and line[2].isdigit()]
     assert [line.split(" | ")[0] for line in lines] == ["| 2", "| 10"]
-    assert "| 2 | fails | 0/30" in table and "2/30" in table and "(b) |" in table
+    assert "| 2 | 32 samples, 2 knots, reward | fails | 0/30" in table and "2/30" in table and "(b) |" in table

@@ -88,7 +88,8 @@ def as_json(rungs: dict, census: dict, res: Ex4Result | None, cfg, s) -> dict:
 
 def summary_table(out) -> str:
     """Every seed whose results this notebook wrote under ``out`` (``metrics/planning/plan_seed<N>.json``):
-    each world model's gate beside the planner's real outcome in it, and the actor's."""
+    each world model's gate beside the planner's real outcome in it, and the actor's; each row names the
+    planner it ran (a folder may hold runs of other settings)."""
     import json
     from pathlib import Path
 
@@ -101,13 +102,16 @@ def summary_table(out) -> str:
         o, g = r["outcomes"], r["gates"]
         cell = {name: f"{x['successes']}/{x['n']} ({x['minus_zero']:+.3f} ± {x['minus_zero_se']:.3f})"
                 for name, x in o.items()}
-        rows.append(f"| {r['seed']} | {'passes' if g['chapter']['passed'] else 'fails'} | {cell['planner_chapter']} | "
+        p = r["settings"]
+        plan = f"{p['samples']} samples, {p['knots']} knots, {p.get('objective', 'reward')}"
+        rows.append(f"| {r['seed']} | {plan} | {'passes' if g['chapter']['passed'] else 'fails'} | {cell['planner_chapter']} | "
                     f"{'passes' if g['recipe']['passed'] else 'fails'} | {cell['planner']} | {cell['actor']} | "
                     f"({r['letter']}) |")
     if not rows:
         return "*No seed's results found yet.*"
-    return ("| seed | gate, chapter's model | planner in it: solved (minus zero actions, reward/step) | gate, recipe's "
-            "model | planner in it | actor in it | Exercise 4 |\n| --- | --- | --- | --- | --- | --- | --- |\n"
+    return ("| seed | planner | gate, chapter's model | planner in it: solved (minus zero actions, reward/step) | "
+            "gate, recipe's model | planner in it | actor in it | Exercise 4 |\n"
+            "| --- | --- | --- | --- | --- | --- | --- | --- |\n"
             + "\n".join(rows) + f"\n\n{len(rows)} seed(s) found in `{Path(out)}`.")
 
 
