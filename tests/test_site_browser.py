@@ -41,7 +41,7 @@ from urllib.parse import urldefrag, urlsplit
 import pytest
 import yaml
 
-from browser_support import chromium, skip_or_fail
+from browser_support import chromium, problems, skip_or_fail, watch
 
 ROOT = Path(__file__).resolve().parents[1]
 pytestmark = pytest.mark.lane
@@ -89,37 +89,6 @@ def artifacts(tmp_path_factory) -> Path:
     path = Path(os.environ.get("LANE_ARTIFACTS") or tmp_path_factory.mktemp("artifacts"))
     path.mkdir(parents=True, exist_ok=True)
     return path
-
-
-def _watch(page, base: str, js: bool = True) -> dict:
-    """Collect what would make a page unfit: console errors, uncaught exceptions, failed
-    requests, error responses, and any request that leaves ``base``. With JavaScript off
-    (``js=False``) the browser refuses to fetch the scripts the page preloads: not a failure."""
-    seen = {"console": [], "pageerror": [], "failed": [], "status": [], "foreign": [], "bytes": 0}
-    page.on("console", lambda m: seen["console"].append(m.text) if m.type == "error" else None)
-    page.on("pageerror", lambda e: seen["pageerror"].append(str(e)))
-
-    def failed(r):
-        if js or r.resource_type != "script":
-            seen["failed"].append(f"{r.url} ({r.failure})")
-    page.on("requestfailed", failed)
-    page.on("request", lambda r: seen["foreign"].append(r.url)
-            if not (r.url.startswith(base) or r.url.startswith("data:")) else None)
-
-    def response(r):
-        if r.status >= 400:
-            seen["status"].append((r.status, r.url))
-        else:
-            try:
-                seen["bytes"] += len(r.body())
-            except Exception:  # noqa: BLE001 - a redirect has no body
-                pass
-    page.on("response", response)
-    return seen
-
-
-def _clean(seen: dict) -> dict:
-    return {k: v for k, v in seen.items() if k != "bytes" and v}
 
 
 # -- the landing page at first sight (issue 42) -----------------------------------------------------
@@ -243,7 +212,7 @@ def test_landing_page_at_first_sight(browser, served, artifacts, width, scheme, 
     ctx = browser.new_context(viewport={"width": px, "height": FIRST_SCREEN_PX}, color_scheme=scheme,
                               java_script_enabled=js)
     page = ctx.new_page()
-    seen = _watch(page, served, js)
+    seen = watch(page, served, js)
     sizes = _bytes_loaded(ctx, page)
     page.goto(f"{served}/index.html")
     page.wait_for_load_state("networkidle")
@@ -257,7 +226,7 @@ def test_landing_page_at_first_sight(browser, served, artifacts, width, scheme, 
     (artifacts / f"{name}.json").write_text(json.dumps(m, indent=1))
     scrub_visible = page.locator("#scrub").is_visible()
     ctx.close()
-    assert not _clean(seen), _clean(seen)
+    assert not problems(seen), problems(seen)
     assert scrub_visible == js                                  # the slider needs JavaScript, and has it
     if js:        # the theme follows the reader's setting (default_mode: auto); without script it stays light
         assert m["theme"] == scheme, m["theme"]
@@ -384,7 +353,7 @@ def test_every_notebook_page_loads_its_images(browser, served, site):
     assert len(pages) >= 6
     for html in pages:
         page = browser.new_page()
-        seen = _watch(page, served)
+        seen = watch(page, served)
         page.goto(f"{served}/notebooks/{html.name}")
         page.wait_for_load_state("networkidle")
         images = page.locator("img").all()
@@ -393,7 +362,7 @@ def test_every_notebook_page_loads_its_images(browser, served, site):
                   if not img.evaluate("i => i.complete && i.naturalWidth > 0")]
         page.close()
         assert not broken, f"{html.name}: images that did not load: {broken}"
-        assert not _clean(seen), (html.name, _clean(seen))
+        assert not problems(seen), (html.name, problems(seen))
 
 
 # -- every notebook page (issue 42, item 7) -------------------------------------------------------
@@ -410,7 +379,7 @@ def test_every_notebook_page_at_first_sight(browser, served, site, artifacts, wi
     desktop, the back-to-top pill (JavaScript on, shown on scrolling up) over no text, no button
     shown with JavaScript off (it would do nothing), every figure loaded and a link to its full size,
     and no plumbing (the install cell) on the page. Each page's first screen is kept (JavaScript on)."""
-    from browser_support import PAGE_MEASURE, problems, watch
+    from browser_support import PAGE_MEASURE
 
     px = WIDTHS[width]
     pages = _notebook_pages(site)
