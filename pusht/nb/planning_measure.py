@@ -83,12 +83,14 @@ def read_rung(name: str, stage, seeds, s: PlanSettings, eval_horizon: int, devic
     return Rung(name, stage, g, signal, moved, dist[0] - dist[-1], curve)
 
 
-def paired(a: np.ndarray, b: np.ndarray, n_starts: int | None = None) -> dict:
+def paired(a: np.ndarray, b: np.ndarray) -> dict:
     """``a - b`` per start, averaged, with its standard error, k (Student's t over the starts) and the
-    verdict both ways (beyond k standard errors and at least the minimum effect)."""
+    verdict both ways (beyond k standard errors and at least the minimum effect). The one-sample test
+    of ``stats.sign_test`` on the differences, as the notebook's claims read it: a dict of plain
+    numbers, NaN starts (an episode with no steps) dropped, the standard error never snapped to 0."""
     d = np.asarray(a, float) - np.asarray(b, float)
     d = d[~np.isnan(d)]
-    k = k_for(n_starts or len(d))
+    k = k_for(len(d))
     diff, s = float(d.mean()), se(d)
     return {"diff": diff, "se": s, "k": k, "min_effect": MIN_REWARD_EFFECT,
             "up": beyond(diff, s, k, MIN_REWARD_EFFECT, +1), "down": beyond(diff, s, k, MIN_REWARD_EFFECT, -1)}
