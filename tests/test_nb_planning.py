@@ -148,7 +148,11 @@ def test_the_outcome_words_table_and_exploitation_read_the_numbers():
     words = nb07.actor_sentence(res, 15)            # the dream rates the actor -0.25, its zero actions -0.40
     assert "better than doing nothing" in words and "exploits even the model" in words
     words = nb07.actor_sentence(result(actor_dream=-0.50), 15)
-    assert "even in the model, the actor is worse than doing nothing" in words and "agree within the noise" in words
+    assert "even in the model, the actor is worse than doing nothing" in words
+    assert "does not rate it above reality beyond the noise" in words
+    # seed 7's shape: the long dream far below reality is not "agreement" (an unseen seed found the old words)
+    words = nb07.actor_sentence(result(actor_dream=-0.80), 15)
+    assert "agree" not in words and "does not rate it above reality" in words
 
 
 def test_the_gate_predicted_sentence_takes_both_branches():

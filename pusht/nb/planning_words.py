@@ -242,7 +242,8 @@ def actor_sentence(res, train_horizon: int) -> str:
         second += (f" Over the whole evaluation the dream rates it {pm(whole['diff'], whole['se'])} above reality: it "
                    f"exploits even the model that passes the gate.")
     else:
-        second += f" Over the whole evaluation its dream and reality agree within the noise ({pm(whole['diff'], whole['se'])})."
+        second += (f" Over the whole evaluation its dream does not rate it above reality beyond the noise and the "
+                   f"minimum effect (dream minus reality {pm(whole['diff'], whole['se'])}).")
     return first + second
 
 
